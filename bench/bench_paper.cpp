@@ -1,0 +1,291 @@
+// Reproduces the paper's experiments (section 4) on the built-in scenes and writes CSV files:
+//   fig1.csv     log cost and parameter error against generations, paper_object, 4 noise levels
+//   table1.csv   provot_cloth from its single equilibrium frame
+//   table2.csv   fluid_jet
+//   scaling.csv  generations to 0.01% error against the number of bond types (random objects)
+//   summary.csv  one line per experiment (errors, generations, wall time)
+// Also: `bench_paper compare TRUTH.yaml ESTIMATE.yaml` prints per-parameter errors.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/io/model_yaml.h"
+#include "motion_model_estimation/scenes/random_object.h"
+#include "motion_model_estimation/scenes/scenes.h"
+
+namespace {
+
+using mme::Model;
+
+struct Errors {
+  double mean = 0, median = 0, max = 0;  // relative errors [%]
+};
+
+Errors relativeErrors(const std::vector<double>& values, const std::vector<double>& truth) {
+  std::vector<double> e;
+  for (size_t k = 0; k < values.size(); ++k)
+    e.push_back(100.0 * std::abs(values[k] - truth[k]) / std::max(std::abs(truth[k]), 1e-300));
+  Errors out;
+  if (e.empty()) return out;
+  for (double x : e) out.mean += x / e.size();
+  out.max = *std::max_element(e.begin(), e.end());
+  std::sort(e.begin(), e.end());
+  out.median = e.size() % 2 ? e[e.size() / 2] : 0.5 * (e[e.size() / 2 - 1] + e[e.size() / 2]);
+  return out;
+}
+
+/// The model as identification sees it: free values forgotten (bounds kept).
+Model forgetFreeValues(Model m) {
+  for (const mme::ParamRef& r : mme::freeParameters(m)) {
+    mme::Param& p = r.bond_type >= 0 ? m.bond_types[r.bond_type].params[r.param]
+                                     : m.gravity_mps2[r.param];
+    p.has_value = false;
+  }
+  return m;
+}
+
+struct RunResult {
+  mme::IdentifyResult result;
+  Errors errors;
+  int generations_to_target = -1;  // first generation with max error < 0.01 %
+};
+
+RunResult runEs(const Model& truth, const mme::Trajectory& data, mme::IdentifyOptions options,
+                const std::function<void(const mme::Progress&, const Errors&)>& per_generation) {
+  const std::vector<double> true_values = mme::getValues(truth, mme::freeParameters(truth));
+  RunResult out;
+  auto progress = [&](const mme::Progress& p) {
+    const Errors e = relativeErrors(p.best_values, true_values);
+    if (out.generations_to_target < 0 && e.max < 0.01) out.generations_to_target = p.generation;
+    if (per_generation) per_generation(p, e);
+  };
+  out.result = mme::identifyModel(forgetFreeValues(truth), data, options, progress);
+  out.errors = relativeErrors(out.result.values, true_values);
+  return out;
+}
+
+std::FILE* openCsv(const std::string& path, const char* header) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) throw mme::InputError(path + ": cannot write");
+  std::fprintf(f, "%s\n", header);
+  return f;
+}
+
+void writeTable(const std::string& path, const RunResult& r, const Model& truth) {
+  std::FILE* f = openCsv(path, "parameter,reference,estimate,error_percent,std");
+  const std::vector<double> ref = mme::getValues(truth, mme::freeParameters(truth));
+  for (size_t k = 0; k < r.result.parameters.size(); ++k)
+    std::fprintf(f, "%s,%.9g,%.9g,%.6f,%.3g\n", r.result.parameters[k].name.c_str(), ref[k],
+                 r.result.values[k], 100.0 * (r.result.values[k] - ref[k]) / std::abs(ref[k]),
+                 r.result.std_devs[k]);
+  std::fclose(f);
+}
+
+void printTable(const char* title, const RunResult& r, const Model& truth) {
+  const std::vector<double> ref = mme::getValues(truth, mme::freeParameters(truth));
+  std::printf("\n%s\n%-26s %14s %14s %10s\n", title, "parameter", "reference", "estimate", "error %");
+  for (size_t k = 0; k < r.result.parameters.size(); ++k)
+    std::printf("%-26s %14.7g %14.7g %10.4f\n", r.result.parameters[k].name.c_str(), ref[k],
+                r.result.values[k], 100.0 * (r.result.values[k] - ref[k]) / std::abs(ref[k]));
+  std::printf("median error %.5f %%, max %.5f %%, cost %.3e, %d generations, %llu evaluations, "
+              "%.1f s\n", r.errors.median, r.errors.max, r.result.global_cost,
+              r.result.generations, static_cast<unsigned long long>(r.result.evaluations),
+              r.result.wall_time_s);
+}
+
+struct Settings {
+  std::string out_dir = "docs/paper";
+  bool quick = false;
+  int threads = 1;
+  std::string only;
+  int generations = 0;       // 0 = each experiment's default
+  int refine_start = -1;     // -1 = engine default
+  int refine_period = -1;
+  int refine_evaluations = -1;
+  bool wants(const std::string& name) const {
+    return only.empty() || ("," + only + ",").find("," + name + ",") != std::string::npos;
+  }
+};
+
+std::FILE* g_summary = nullptr;
+
+void summary(const std::string& experiment, const RunResult& r) {
+  std::fprintf(g_summary, "%s,%zu,%.6g,%.6g,%.6g,%d,%d,%llu,%.3f,%.6g\n", experiment.c_str(),
+               r.result.parameters.size(), r.errors.mean, r.errors.median, r.errors.max,
+               r.result.generations, r.generations_to_target,
+               static_cast<unsigned long long>(r.result.evaluations), r.result.wall_time_s,
+               r.result.global_cost);
+  std::fflush(g_summary);
+}
+
+mme::IdentifyOptions esOptions(const Settings& s, int generations) {
+  mme::IdentifyOptions o;
+  if (s.generations > 0) generations = s.generations;
+  o.generations = s.quick ? std::max(20, generations / 20) : generations;
+  if (s.refine_start >= 0) o.es.refine_start_generation = s.refine_start;
+  if (s.refine_period >= 0) o.es.refine_period = s.refine_period;
+  if (s.refine_evaluations >= 0) o.es.refine_max_evaluations = s.refine_evaluations;
+  o.es.threads = s.threads;
+  o.es.seed = 1;
+  return o;
+}
+
+void figure1(const Settings& s) {
+  const mme::Scene scene = mme::makeScene("paper_object");
+  std::FILE* f = openCsv(s.out_dir + "/fig1.csv",
+                         "noise_std_m,generation,evaluations,log10_cost,log10_mean_error_percent,"
+                         "median_error_percent,max_error_percent,wall_s");
+  for (double noise : {0.0, 1e-5, 1e-4, 1e-3}) {
+    mme::Trajectory data =
+        mme::simulateTrajectory(scene.model, scene.default_frames, scene.model.frame_rate_hz);
+    mme::addGaussianNoise(&data, noise, 11);
+    auto log = [&](const mme::Progress& p, const Errors& e) {
+      std::fprintf(f, "%g,%d,%llu,%.6f,%.6f,%.6g,%.6g,%.3f\n", noise, p.generation,
+                   static_cast<unsigned long long>(p.evaluations),
+                   std::log10(std::max(p.best_cost, 1e-300)),
+                   std::log10(std::max(e.mean, 1e-300)), e.median, e.max, p.wall_time_s);
+    };
+    const RunResult r = runEs(scene.model, data, esOptions(s, 1000), log);
+    char name[64];
+    std::snprintf(name, sizeof(name), "fig1_noise_%g", noise);
+    std::printf("paper_object noise %g m: mean error %.5f %%, median %.5f %%, max %.5f %%, "
+                "cost %.3e, %.1f s, %d generations to max error < 0.01 %%\n",
+                noise, r.errors.mean, r.errors.median, r.errors.max, r.result.global_cost,
+                r.result.wall_time_s, r.generations_to_target);
+    summary(name, r);
+  }
+  std::fclose(f);
+}
+
+void table1(const Settings& s) {
+  const mme::Scene scene = mme::makeScene("provot_cloth");
+  const RunResult r = runEs(scene.model, scene.reference_data, esOptions(s, 1000), nullptr);
+  printTable("Table I: provot_cloth (single equilibrium frame)", r, scene.model);
+  writeTable(s.out_dir + "/table1.csv", r, scene.model);
+  summary("table1_provot_cloth", r);
+}
+
+void table2(const Settings& s) {
+  const mme::Scene scene = mme::makeScene("fluid_jet");
+  const mme::Trajectory data =
+      mme::simulateTrajectory(scene.model, scene.default_frames, scene.model.frame_rate_hz);
+  const RunResult r = runEs(scene.model, data, esOptions(s, 1000), nullptr);
+  printTable("Table II: fluid_jet", r, scene.model);
+  writeTable(s.out_dir + "/table2.csv", r, scene.model);
+  summary("table2_fluid_jet", r);
+}
+
+void scaling(const Settings& s) {
+  std::FILE* f = openCsv(s.out_dir + "/scaling.csv",
+                         "bond_types,unknowns,particles,bonds,generations_to_0.01pct,"
+                         "final_max_error_percent,evaluations,wall_s");
+  for (int types : {5, 10, 20, 40}) {
+    mme::RandomObjectSpec spec;
+    spec.bond_types = types;
+    spec.particles = std::max(8, types + types / 2);
+    spec.bonds = 3 * types;
+    spec.frame_rate_hz = 100.0;
+    spec.seed = 100 + types;
+    const Model truth = mme::makeRandomObject(spec);
+    const mme::Trajectory data = mme::simulateTrajectory(truth, 100, spec.frame_rate_hz);
+    const RunResult r = runEs(truth, data, esOptions(s, 1500), nullptr);
+    std::fprintf(f, "%d,%d,%d,%d,%d,%.6g,%llu,%.3f\n", types, 2 * types, spec.particles,
+                 spec.bonds, r.generations_to_target, r.errors.max,
+                 static_cast<unsigned long long>(r.result.evaluations), r.result.wall_time_s);
+    std::fflush(f);
+    std::printf("random object, %d bond types (%d unknowns): max error %.5f %%, generations to "
+                "0.01 %%: %d, %.1f s\n", types, 2 * types, r.errors.max, r.generations_to_target,
+                r.result.wall_time_s);
+    summary("scaling_" + std::to_string(types) + "_types", r);
+  }
+  std::fclose(f);
+}
+
+/// Writes the truth and the no-values model of the 18-marker random object (issue target) for
+/// the CLI pipeline in scripts/bench-paper.
+void randomObjectFiles(const Settings& s) {
+  mme::RandomObjectSpec spec;  // 18 markers, 12 types, 40 bonds, 120 Hz
+  spec.seed = 2026;
+  Model truth = mme::makeRandomObject(spec);
+  mme::writeModelFile(s.out_dir + "/random18_truth.yaml", truth);
+  // No values and no bounds for the free parameters: the defaults must do.
+  Model blank = forgetFreeValues(truth);
+  for (mme::BondType& t : blank.bond_types)
+    for (mme::Param& p : t.params) {
+      p.has_min = p.has_max = false;
+      p.min = -INFINITY;
+      p.max = INFINITY;
+    }
+  mme::writeModelFile(s.out_dir + "/random18_model.yaml", blank);
+  std::printf("wrote %s/random18_truth.yaml and random18_model.yaml\n", s.out_dir.c_str());
+}
+
+int compare(const std::string& truth_path, const std::string& estimate_path) {
+  const Model truth = mme::loadModelFile(truth_path);
+  const Model estimate = mme::loadModelFile(estimate_path);
+  const std::vector<mme::ParamRef> refs = mme::freeParameters(estimate);
+  std::vector<double> t, e;
+  std::printf("%-26s %14s %14s %10s\n", "parameter", "true", "estimate", "error %");
+  for (const mme::ParamRef& r : refs) {
+    t.push_back(mme::getParam(truth, r));
+    e.push_back(mme::getParam(estimate, r));
+    std::printf("%-26s %14.8g %14.8g %10.5f\n", r.name.c_str(), t.back(), e.back(),
+                100.0 * (e.back() - t.back()) / std::abs(t.back()));
+  }
+  const Errors err = relativeErrors(e, t);
+  std::printf("compare: %zu parameters, median error %.5f %%, max %.5f %%\n", refs.size(),
+              err.median, err.max);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    if (argc == 4 && std::strcmp(argv[1], "compare") == 0) return compare(argv[2], argv[3]);
+    Settings s;
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      if (a == "--quick") s.quick = true;
+      else if (a == "--out-dir" && i + 1 < argc) s.out_dir = argv[++i];
+      else if (a == "--threads" && i + 1 < argc) s.threads = std::max(1, std::atoi(argv[++i]));
+      else if (a == "--only" && i + 1 < argc) s.only = argv[++i];
+      else if (a == "--generations" && i + 1 < argc) s.generations = std::atoi(argv[++i]);
+      else if (a == "--refine-start" && i + 1 < argc) s.refine_start = std::atoi(argv[++i]);
+      else if (a == "--refine-period" && i + 1 < argc) s.refine_period = std::atoi(argv[++i]);
+      else if (a == "--refine-evaluations" && i + 1 < argc) s.refine_evaluations = std::atoi(argv[++i]);
+      else {
+        std::fprintf(stderr, "usage: bench_paper [--quick] [--out-dir DIR] [--threads T] "
+                             "[--only fig1,table1,table2,scaling,random18]\n"
+                             "       [--generations N] [--refine-start G] [--refine-period G]\n"
+                             "       [--refine-evaluations E]\n"
+                             "       bench_paper compare TRUTH.yaml ESTIMATE.yaml\n");
+        return 2;
+      }
+    }
+    g_summary = openCsv(s.out_dir + "/summary.csv",
+                        "experiment,unknowns,mean_error_percent,median_error_percent,"
+                        "max_error_percent,generations,generations_to_0.01pct,evaluations,"
+                        "wall_s,global_cost");
+    if (s.wants("random18")) randomObjectFiles(s);
+    if (s.wants("table1")) table1(s);
+    if (s.wants("fig1")) figure1(s);
+    if (s.wants("table2")) table2(s);
+    if (s.wants("scaling")) scaling(s);
+    std::fclose(g_summary);
+    return 0;
+  } catch (const mme::InputError& e) {
+    std::fprintf(stderr, "bench_paper: %s\n", e.what());
+    return 2;
+  }
+}

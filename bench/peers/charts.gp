@@ -1,0 +1,100 @@
+# Charts of the peer benchmark (issue 5), drawn by scripts/bench:
+#   gnuplot -e "dir='docs/bench'; scenes='paper_object ...'" bench/peers/charts.gp
+# Reads the CSV files bench_peers wrote into dir, writes PNG files next to them.
+set terminal pngcairo size 1200,800 noenhanced font ",10"
+set datafile separator ","
+set datafile missing "n/a"
+methods = "es_local es_global cmaes sade bobyqa lm lls"
+set style line 1 lc rgb "#1f77b4" lw 2 pt 7
+set style line 2 lc rgb "#aec7e8" lw 2 pt 7
+set style line 3 lc rgb "#d62728" lw 2 pt 5
+set style line 4 lc rgb "#ff9896" lw 2 pt 5
+set style line 5 lc rgb "#2ca02c" lw 2 pt 9
+set style line 6 lc rgb "#9467bd" lw 2 pt 11
+set style line 7 lc rgb "#000000" lw 2 pt 13 ps 2
+floor_err = 1e-7
+clip(x) = (x < floor_err ? floor_err : x)
+
+# ---------------------------------------------------------------- (a) speed against accuracy
+trace = dir."/speed_accuracy_trace.csv"
+runs = dir."/speed_accuracy_runs.csv"
+do for [scene in scenes] {
+  set output dir."/speed_accuracy_".scene.".png"
+  set multiplot layout 2,2 title scene.": best-so-far parameter error (seed 1; LLS = one solve, black point)"
+  set logscale xy
+  set format y "%.0e"
+  set key bottom left
+  do for [col in "8 7"] {
+    errname = (col eq "8" ? "max" : "median")
+    rcol = (col eq "8" ? 9 : 8)
+    set xlabel "cost evaluations"; set ylabel errname." parameter error [%]"
+    plot for [k=1:6] trace using (strcol(1) eq scene && strcol(2) eq word(methods,k) && $3==1 ? $4 : 1/0):(clip(column(col+0))) \
+           with steps ls k title word(methods,k), \
+         runs using (strcol(1) eq scene && strcol(2) eq "lls" && $3==1 ? 1 : 1/0):(clip(column(rcol))) with points ls 7 title "lls"
+    set xlabel "wall time [s]"
+    plot for [k=1:6] trace using (strcol(1) eq scene && strcol(2) eq word(methods,k) && $3==1 ? $5 : 1/0):(clip(column(col+0))) \
+           with steps ls k title word(methods,k), \
+         runs using (strcol(1) eq scene && strcol(2) eq "lls" && $3==1 ? ($7 > 1e-5 ? $7 : 1e-5) : 1/0):(clip(column(rcol))) with points ls 7 title "lls"
+  }
+  unset multiplot
+  unset logscale
+  set format y "%g"
+}
+
+# ---------------------------------------------------------------- (b) stability map
+rates = dir."/stability_rates.csv"
+set output dir."/stability_map.png"
+set multiplot layout 2,3 title "success rate (all parameters within 1 %) per setting; one line per method"
+set yrange [-0.05:1.05]
+set key top right font ",8"
+set ylabel "success rate"
+do for [axis in "noise omega_h occlusion spread unknowns conditional"] {
+  set xlabel axis
+  set xrange [-0.3:*]
+  plot for [k=1:7] rates using (strcol(1) eq axis && strcol(4) eq word(methods,k) ? $3 + (k-4)*0.02 : 1/0):7:xtic(2) \
+       with linespoints ls k title word(methods,k)
+}
+unset multiplot
+set xrange [*:*]; set yrange [*:*]
+
+# ---------------------------------------------------------------- (c) long rollouts
+set output dir."/rollout.png"
+set multiplot layout 1,2 title "(c) identified models whose long rollout (10x the window) stays bounded"
+set style data histograms
+set style histogram clustered gap 1
+set style fill solid 0.8 border -1
+set yrange [0:1.05]
+set ylabel "bounded share"
+set xlabel ""
+set key top right
+plot dir."/rollout.csv" using 4:xtic(1) title "stability-map runs", '' using 7 title "speed-accuracy runs"
+set style data linespoints
+set xlabel "omega_max * h (explicit limit 2)"
+set xrange [-0.3:*]
+plot for [k=1:7] rates using (strcol(1) eq "omega_h" && strcol(4) eq word(methods,k) ? $3 + (k-4)*0.02 : 1/0):8:xtic(2) \
+     with linespoints ls k title word(methods,k)
+unset multiplot
+set xrange [*:*]; set yrange [*:*]
+
+# ---------------------------------------------------------------- (d) scaling
+set output dir."/scaling.png"
+set multiplot layout 1,2 title "(d) es_local: time per generation (100 children) on spring sheets, 10 frames"
+set logscale xy
+set xlabel "particles"; set ylabel "s per generation"; set key top left
+plot dir."/scaling.csv" using ($5==1 ? $1 : 1/0):6 with linespoints ls 1 title "1 thread", \
+     '' using ($5==2 ? $1 : 1/0):6 with linespoints ls 3 title "2 threads"
+unset logscale y
+set logscale x
+set yrange [0:1.1]; set ylabel "parallel efficiency t1 / (2 t2)"
+plot dir."/scaling.csv" using ($5==2 ? $1 : 1/0):8 with linespoints ls 3 title "2 threads", 0.85 with lines dt 2 lc rgb "gray" title "85 % target"
+unset multiplot
+unset logscale; set yrange [*:*]
+
+# ---------------------------------------------------------------- generations against unknowns
+set output dir."/generations_vs_unknowns.png"
+set terminal pngcairo size 800,500 noenhanced font ",10"
+set logscale x
+set xlabel "unknowns"; set ylabel "median generations to max error < 1 % (converged seeds)"
+set key top left
+plot for [k in "1 2 3 4"] dir."/unknowns_generations.csv" using (strcol(2) eq word(methods,k+0) ? $1 : 1/0):5 \
+     with linespoints ls k+0 title word(methods,k+0)

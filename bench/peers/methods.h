@@ -1,0 +1,76 @@
+// The methods compared by the peer benchmark, all on the same Problem (cost function, search
+// space, random starts) and judged the same way: the best-cost point found so far is the
+// method's answer; its parameter errors against the truth are recorded along the run.
+//   es_local   the paper's ES with local costs (mme::EvolutionStrategy, default options)
+//   es_global  the same engine with the local-cost operators switched off through its options
+//              (share_partial_replica = share_crossover = 0, their share given to share_replica)
+//   cmaes      pagmo2 CMA-ES (restarts from the next starts when it stops or stalls)
+//   sade       pagmo2 self-adaptive differential evolution (jDE), same restarts
+//   bobyqa     NLopt BOBYQA, multi-start from the same random starts until the budget
+//   lm         Ceres Levenberg-Marquardt, residuals = sqrt of the per-(particle, frame) cost
+//              terms, central numeric differences, multi-start until the budget
+//   lls        linear least squares on the equation error (one solve; linear springs only)
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "problem.h"
+
+namespace bench {
+
+struct Budget {
+  uint64_t max_evaluations = 100000;  ///< cost evaluations (full-cost equivalents)
+  double max_wall_s = 60.0;           ///< wall-time limit of one run
+  /// Oracle stop: the run ends once the best point's max parameter error is below this [%]
+  /// (0 = never). Only used to save time: it cannot change when a threshold is first reached.
+  double stop_max_error_pct = 0.0;
+};
+
+struct TracePoint {
+  uint64_t evaluations = 0;
+  double wall_s = 0.0;
+  double cost = 0.0;
+  double median_error_pct = 0.0;
+  double max_error_pct = 0.0;
+};
+
+/// First time the best point's max error went below a threshold.
+struct Milestone {
+  bool reached = false;
+  uint64_t evaluations = 0;
+  double wall_s = 0.0;
+  int generations = -1;  ///< generations of population methods at that moment (-1 otherwise)
+};
+
+struct RunResult {
+  std::string method;
+  bool applicable = true;  ///< false: "n/a" (LLS on conditional/non-linear bonds)
+  std::string note;        ///< n/a reason or how the run ended
+  std::vector<double> values;  ///< physical, free-parameter order
+  double cost = 0.0;
+  Errors errors;
+  uint64_t evaluations = 0;
+  double wall_s = 0.0;
+  int generations = -1;
+  int restarts = 0;
+  Milestone to_1pct, to_001pct;  ///< max error < 1 % and < 0.01 %
+  bool bounded = false;           ///< long rollout of the answer stays bounded
+  std::vector<TracePoint> trace;  ///< best-so-far curve (thinned)
+};
+
+/// Methods compiled in (peers missing at build time are left out).
+std::vector<std::string> availableMethods();
+/// Every method the benchmark knows, available or not.
+std::vector<std::string> allMethods();
+bool methodAvailable(const std::string& method);
+
+/// Runs one method on one problem from the random starts of `seed`.
+RunResult runMethod(const std::string& method, const Problem& problem, uint64_t seed,
+                    const Budget& budget, bool keep_trace);
+
+/// Equation-error least squares (also used standalone): fills values; false when n/a.
+bool solveEquationError(const Problem& problem, std::vector<double>* values, std::string* why);
+
+}  // namespace bench

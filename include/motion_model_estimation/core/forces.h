@@ -1,0 +1,44 @@
+// Force laws of the bond catalogue (SPEC section 3) and their energies, for one bond at a time.
+#pragma once
+
+#include <Eigen/Core>
+
+namespace mme {
+
+/// Parameters of one spring type in the form the inner loop wants.
+struct SpringLaw {
+  double stiffness = 0;      ///< k [N/m]
+  double rest_length = 0;    ///< L [m]
+  double damping = 0;        ///< c [N s/m]
+  double stiffness_nl = 0;   ///< k_nl [N/m^3]
+  double damping_nl = 0;     ///< c_nl [N s^2/m^2]
+  double min_distance = 0;   ///< [m] (0 = no lower condition)
+  double max_distance = 1e300;  ///< [m] (huge = no upper condition)
+};
+
+struct FlexionLaw {
+  double stiffness = 0;   ///< [N m/rad]
+  double rest_angle = 0;  ///< [rad]
+  double damping = 0;     ///< [N m s/rad]
+};
+
+/// Adds the spring force between a and b: f = k e + k_nl e^3 + c s + c_nl s|s| along u = (xb-xa)/l;
+/// F_a += f u, F_b -= f u; nothing outside [min_distance, max_distance] or when l == 0.
+void addSpringForce(const SpringLaw& law, const Eigen::Vector3d& xa, const Eigen::Vector3d& xb,
+                    const Eigen::Vector3d& va, const Eigen::Vector3d& vb, Eigen::Vector3d* fa,
+                    Eigen::Vector3d* fb);
+/// Elastic energy 1/2 k e^2 + 1/4 k_nl e^4 (0 when inactive) [J].
+double springEnergy(const SpringLaw& law, const Eigen::Vector3d& xa, const Eigen::Vector3d& xb);
+
+/// Angle at vertex b between (a-b) and (c-b) [rad], in [0, pi].
+double flexionAngle(const Eigen::Vector3d& xa, const Eigen::Vector3d& xb, const Eigen::Vector3d& xc);
+/// Adds flexion forces: -grad of 1/2 k (theta - theta0)^2 plus damping -c dtheta/dt grad(theta).
+/// Skipped when the three points are (nearly) collinear-degenerate.
+void addFlexionForce(const FlexionLaw& law, const Eigen::Vector3d& xa, const Eigen::Vector3d& xb,
+                     const Eigen::Vector3d& xc, const Eigen::Vector3d& va, const Eigen::Vector3d& vb,
+                     const Eigen::Vector3d& vc, Eigen::Vector3d* fa, Eigen::Vector3d* fb,
+                     Eigen::Vector3d* fc);
+double flexionEnergy(const FlexionLaw& law, const Eigen::Vector3d& xa, const Eigen::Vector3d& xb,
+                     const Eigen::Vector3d& xc);
+
+}  // namespace mme

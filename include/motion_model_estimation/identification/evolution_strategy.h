@@ -1,0 +1,113 @@
+// The paper's evolution strategy on local costs (Stanciulescu & Louchet, section 3): self-adaptive
+// mutabilities, four mutation types, local-cost-biased multi-parent crossover, elitist biased
+// selection and a periodic Powell-family refinement. The caller owns the loop (step()), and the
+// cost function can be swapped for a newer window while the population lives on (warm start).
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "motion_model_estimation/core/cost.h"
+#include "motion_model_estimation/core/random.h"
+#include "motion_model_estimation/identification/parameter_space.h"
+
+namespace mme {
+
+struct EsOptions {
+  int population = 100;          ///< individuals kept per generation
+  int offspring = 100;           ///< children created per generation
+  uint64_t seed = 1;             ///< the only source of randomness
+  int threads = 1;               ///< threads evaluating children (result independent of it)
+  // Share of children made by each operator (normalised): entirely new, partly new (one bond
+  // type redrawn), mutability-scaled replica, partial replica of one bond type chosen by local
+  // cost, multi-parent crossover.
+  double share_new = 0.04;
+  double share_partly_new = 0.06;
+  double share_replica = 0.30;
+  double share_partial_replica = 0.30;
+  double share_crossover = 0.30;
+  int tournament_size = 3;       ///< bias toward good (global or local) costs when choosing parents
+  double elite_fraction = 0.2;   ///< best share of the pool always kept
+  double initial_mutability = 0.05;  ///< initial mutation std as a share of each gene's range
+  int refine_start_generation = 400;  ///< first generation with a Powell-family refinement
+  int refine_period = 100;            ///< generations between refinements (0 = never)
+  int refine_max_evaluations = 0;     ///< per refinement; 0 = 30 x genes + 100
+  std::string refine_algorithm = "bobyqa";  ///< bobyqa | newuoa | praxis
+};
+
+/// Empty string when the options are usable, else the reason naming the option.
+std::string validateOptions(const EsOptions& options);
+
+struct Individual {
+  std::vector<double> genes;        ///< search-space values (see ParameterSpace)
+  std::vector<double> mutability;   ///< self-adaptive mutation std per gene (search space)
+  std::vector<double> local_costs;  ///< per particle [m^2], from the last evaluation
+  double cost = std::numeric_limits<double>::infinity();  ///< global cost [m^2]
+};
+
+/// Which operator made a child (for statistics and tests).
+enum class Operator { kInitial, kNew, kPartlyNew, kReplica, kPartialReplica, kCrossover, kRefine };
+
+class EvolutionStrategy {
+ public:
+  EvolutionStrategy(ParameterSpace space, const EsOptions& options);
+
+  /// Sets the cost to minimise. With a live population this re-evaluates it (warm start when
+  /// the window slides). The cost's free parameters must match the space's genes.
+  void setCostFunction(std::shared_ptr<const CostFunction> cost);
+  /// One generation (the first call also draws the initial population).
+  void step();
+  /// Forgets the population; the next step() starts from scratch.
+  void reset();
+  /// Makes the next initial population start at `genes` (one individual exactly there, the
+  /// others around it with std spread_fraction x each gene's range): resuming a saved model.
+  void setInitialGuess(const std::vector<double>& genes, double spread_fraction);
+  /// Replaces the population (evaluated individuals: cost and local costs set), e.g. to resume
+  /// from a saved model; also used by tests to set up operator situations.
+  void setPopulation(std::vector<Individual> population);
+
+  const Individual& best() const;
+  std::vector<double> bestValues() const;  ///< physical values of the best individual
+  const std::vector<Individual>& population() const { return population_; }
+  const ParameterSpace& space() const { return space_; }
+  const EsOptions& options() const { return options_; }
+  int generation() const { return generation_; }
+  uint64_t evaluations() const { return evaluations_; }
+  /// Children made per operator so far (index = Operator).
+  const std::vector<uint64_t>& operatorCounts() const { return operator_counts_; }
+  /// Children of each operator that entered the population (survived selection).
+  const std::vector<uint64_t>& operatorSuccesses() const { return operator_successes_; }
+
+  // Building blocks, public for tests.
+  Individual makeRandom();
+  Individual crossover();
+  /// Index of a parent chosen by tournament on the sum of local costs at `sites`
+  /// (all particles when empty = global cost).
+  int chooseParent(const std::vector<int>& sites);
+  void evaluate(std::vector<Individual>* individuals);
+
+ private:
+  Individual makeChild(Operator* op);
+  void mutateGenes(Individual* child, const std::vector<int>& genes);
+  void select(std::vector<Individual>* children, const std::vector<Operator>& ops);
+  void refineBest();
+  void initialise();
+
+  ParameterSpace space_;
+  EsOptions options_;
+  std::shared_ptr<const CostFunction> cost_;
+  Random random_;
+  std::vector<Individual> population_;
+  int best_index_ = 0;
+  int generation_ = 0;
+  uint64_t evaluations_ = 0;
+  std::vector<uint64_t> operator_counts_;
+  std::vector<uint64_t> operator_successes_;
+  std::vector<double> initial_guess_;
+  double initial_guess_spread_ = 0.0;
+};
+
+}  // namespace mme

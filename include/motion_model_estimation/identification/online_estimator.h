@@ -1,0 +1,107 @@
+// Online identification over a sliding window of frames: frames arrive from any thread, a
+// worker calls update() to run a few generations on the current window with the population
+// warm-started from the previous window, and readers take the latest estimate. No ROS here; the
+// node only converts messages and drives it.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "motion_model_estimation/core/model.h"
+#include "motion_model_estimation/core/trajectory.h"
+#include "motion_model_estimation/identification/evolution_strategy.h"
+
+namespace mme {
+
+struct OnlineEstimatorOptions {
+  int window_frames = 100;          ///< frames in the sliding window
+  int min_frames = 10;              ///< frames needed before the first update
+  int generations_per_update = 5;   ///< generations run by one update()
+  double stability_rollout_factor = 10.0;  ///< stability rollout length / window length
+  /// Start the population at the model's values of the free parameters when all have one
+  /// (resuming an autosaved model) instead of the paper's random initialisation.
+  bool resume_from_model_values = false;
+  EsOptions es;                     ///< population, seed, threads, operators
+};
+
+std::string validateOptions(const OnlineEstimatorOptions& options);
+
+/// A snapshot of the current best model.
+struct Estimate {
+  bool valid = false;               ///< false until the first update
+  uint32_t generation = 0;
+  uint64_t evaluations = 0;
+  double global_cost = 0.0;         ///< [m^2] on the window it was computed on
+  uint32_t window_frames = 0;
+  std::vector<std::string> parameter_names;
+  std::vector<double> values;
+  std::vector<double> std_devs;     ///< 1-sigma spread of the population's elite (NaN: unknown)
+  std::vector<double> local_costs;  ///< per particle [m^2]
+  bool stable = false;              ///< the long rollout from the window start stays bounded
+  double window_start_time_s = 0.0;
+  double window_end_time_s = 0.0;
+};
+
+/// Counters of rejected input, for diagnostics.
+struct InputCounters {
+  uint64_t accepted = 0;
+  uint64_t rejected_size = 0;      ///< wrong number of positions
+  uint64_t rejected_time = 0;      ///< time not after the previous frame (reordered, duplicated)
+  uint64_t occluded_samples = 0;   ///< occluded or non-finite samples masked
+};
+
+class OnlineEstimator {
+ public:
+  /// Throws InputError when the model or options are unusable.
+  OnlineEstimator(const Model& model, const OnlineEstimatorOptions& options);
+
+  /// Adds a frame in the model's particle order (thread-safe). Returns an empty string when
+  /// accepted, else why it was rejected. Non-finite positions are masked as occluded.
+  std::string addFrame(double time_s, const std::vector<Eigen::Vector3d>& positions_m,
+                       const std::vector<uint8_t>& occluded);
+  /// Runs generations_per_update generations on the current window (call from one worker
+  /// thread). Returns false when there are not enough frames yet.
+  bool update();
+  /// The latest estimate (thread-safe copy).
+  Estimate estimate() const;
+  InputCounters counters() const;
+  /// The current window (thread-safe copy), particles as markers.
+  Trajectory window() const;
+  /// The model with the best values filled in (the loaded model before the first update).
+  Model currentModel() const;
+  /// Forgets the population (and the window when `clear_window`).
+  void reset(bool clear_window);
+  /// Replaces the model (same or different structure); the population restarts. Throws
+  /// InputError when unusable.
+  void replaceModel(const Model& model);
+  std::vector<std::string> particleNames() const;  ///< model particle order (thread-safe copy)
+  double frameRateHz() const;
+  /// Simulates `frames` frames of `model` from the first two frames of `window` (positions and
+  /// finite-difference velocity); empty when the window is too short or occluded there.
+  static Trajectory rollout(const Model& model, const Trajectory& window, int frames);
+
+ private:
+  Trajectory snapshotLocked() const;
+
+  mutable std::mutex frames_mutex_;
+  std::deque<double> times_s_;
+  std::deque<std::vector<Eigen::Vector3d>> positions_;
+  std::deque<std::vector<uint8_t>> occluded_;
+  InputCounters counters_;
+
+  mutable std::mutex update_mutex_;  // guards model_, options_, es_ (held through update())
+  Model model_;
+  std::vector<std::string> names_;
+  OnlineEstimatorOptions options_;
+  std::unique_ptr<EvolutionStrategy> es_;
+  mutable std::mutex estimate_mutex_;  // guards estimate_ (readers never wait for an update)
+  Estimate estimate_;
+};
+
+}  // namespace mme

@@ -1,0 +1,16 @@
+// OpenSim TRC marker files (text): read and write.
+#pragma once
+
+#include <string>
+
+#include "motion_model_estimation/core/trajectory.h"
+
+namespace mme {
+
+/// Reads a TRC file; units mm, cm or m converted to metres; empty fields or 0,0,0 = occluded.
+/// Throws InputError naming the file and line on malformed input.
+Trajectory readTrc(const std::string& path);
+/// Writes a TRC file in `units` ("mm", "cm" or "m"), occluded samples as empty fields; atomic.
+void writeTrc(const std::string& path, const Trajectory& trajectory, const std::string& units = "mm");
+
+}  // namespace mme

@@ -1,0 +1,105 @@
+// The online estimator's ROS wiring (SPEC section 6): inputs (MarkerFrame, PointCloud2,
+// vicon_bridge/Markers, a bag), tf2 into ~fixed_frame, a worker thread running the
+// OnlineEstimator, ~estimate, ~markers and the services. Domain logic lives in the core.
+#pragma once
+
+#include <ros/ros.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <std_srvs/Trigger.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+#include <topic_tools/shape_shifter.h>
+
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <unordered_map>
+#include <vector>
+
+#include "motion_model_estimation/ExportModel.h"
+#include "motion_model_estimation/LoadModel.h"
+#include "motion_model_estimation/MarkerFrame.h"
+#include "motion_model_estimation/identification/online_estimator.h"
+
+namespace mme {
+
+/// ROS-side options (see config/estimator.yaml for meaning, units and defaults).
+struct EstimatorNodeOptions {
+  std::string model_path;
+  std::string input_type = "markers";  ///< markers | pointcloud | vicon
+  std::string bag;                     ///< read this bag instead of subscribing
+  std::string bag_topic;               ///< MarkerFrame topic in the bag ("" = the only one)
+  double bag_rate = 0.0;               ///< x real time; 0 = as fast as the estimator keeps up
+  std::string fixed_frame;             ///< "" = the model's frame_id
+  double update_rate_hz = 10.0;        ///< ~estimate publication rate
+  bool publish_markers = true;
+  std::string color_bonds_by = "strain";  ///< strain | local_cost
+  double particle_diameter_m = 0.02;
+  double tf_timeout_sec = 0.05;
+  bool vicon_qualify_with_subject = false;  ///< names "subject/marker" for vicon input
+  std::string model_dir;               ///< services only touch files under it ("" = ROS home)
+  std::string autosave_path;           ///< "" = off; relative paths are inside model_dir
+  double autosave_period_sec = 10.0;   ///< [s] between autosaves
+  std::string initial_model;           ///< resume from this model file when it exists
+  OnlineEstimatorOptions estimator;
+};
+
+/// Reads and validates every private param. Throws InputError naming the bad param.
+EstimatorNodeOptions readEstimatorOptions(const ros::NodeHandle& pnh);
+
+class EstimatorNode {
+ public:
+  /// Loads the model, advertises and subscribes. Throws InputError on bad params or model.
+  EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh, const EstimatorNodeOptions& options);
+  ~EstimatorNode();
+  /// Runs until shutdown (AsyncSpinner + worker thread + optional bag feeder).
+  void run();
+
+ private:
+  void onMarkerFrame(const motion_model_estimation::MarkerFrame::ConstPtr& msg);
+  void onPointCloud(const sensor_msgs::PointCloud2::ConstPtr& msg);
+  void onVicon(const topic_tools::ShapeShifter::ConstPtr& msg);
+  /// Common path: names (empty = model order), transform, mask, add to the estimator.
+  void addObservation(const ros::Time& stamp, const std::string& frame_id,
+                      const std::vector<std::string>& names,
+                      std::vector<Eigen::Vector3d> positions_m, std::vector<uint8_t> occluded);
+  void reject(const std::string& why);
+  void workerLoop();
+  void bagLoop();
+  void onPublishTimer(const ros::WallTimerEvent&);
+  void publishMarkers(const Estimate& estimate);
+  void onAutosaveTimer(const ros::WallTimerEvent&);
+  void onStatsTimer(const ros::WallTimerEvent&);  ///< ~stats: input counters (std_msgs/String)
+  std::string exportYaml(const Estimate& estimate) const;
+  bool onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
+  bool onExport(motion_model_estimation::ExportModel::Request& req,
+                motion_model_estimation::ExportModel::Response& res);
+  bool onLoad(motion_model_estimation::LoadModel::Request& req,
+              motion_model_estimation::LoadModel::Response& res);
+
+  ros::NodeHandle nh_, pnh_;
+  EstimatorNodeOptions options_;
+  std::unique_ptr<OnlineEstimator> estimator_;
+  std::string fixed_frame_;
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+  ros::Subscriber input_sub_;
+  ros::Publisher estimate_pub_, markers_pub_, stats_pub_;
+  ros::ServiceServer reset_srv_, export_srv_, load_srv_;
+  ros::WallTimer publish_timer_, autosave_timer_, stats_timer_;
+  std::string autosave_target_;  // confined absolute path, "" = off
+  std::thread worker_, bag_thread_;
+  std::atomic<bool> stop_{false};
+  std::atomic<uint64_t> rejected_{0};
+  std::atomic<uint64_t> updates_{0};
+  std::atomic<uint64_t> clock_jumps_{0};  // frames > 1 s from the previous one: new window
+  std::atomic<double> last_frame_time_s_{-1e300};
+  std::atomic<uint32_t> last_published_generation_{0};  // timer and services: two threads
+  std::mutex names_mutex_;
+  std::vector<std::string> cached_names_;
+  std::vector<int> cached_index_;  // input position -> particle index (-1 = unknown marker)
+};
+
+}  // namespace mme

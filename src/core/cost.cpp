@@ -1,0 +1,470 @@
+// Short-term prediction cost. Everything that does not depend on parameter values (filled
+// positions, observed velocities, valid-term lists, interaction candidate pairs) is computed
+// once here; evaluate() only copies a frame's state into scratch and runs the shared Engine
+// (the Simulator's own integrator, so the true model costs ~0 on its simulated data).
+//
+// Choices where the header leaves room:
+//  - Start velocity v(t) = (x(t) - x(t-1))/h for free particles; fixed particles keep the
+//    model's velocity (what the Simulator does), and unknown velocities are 0.
+//  - Occluded positions are replaced by the particle's last known one (else its first known,
+//    else the model's): finite, and every term they could reach is dropped anyway.
+//  - Interaction candidates are found once per frame at x(t) within a radius of: max_distance
+//    when it is fixed (plus, with substeps > 1, a margin of twice the fastest observed
+//    displacement in the frame, for pairs that close in during the frame); its upper bound
+//    when it is free (twice its initial value when unbounded). evaluate() re-checks every
+//    candidate's length at every substep against the current value, capped at that radius.
+//  - Each frame's candidates are sorted by their length at x(t); evaluate() only visits the
+//    prefix within the current max_distance (plus the frame's margin with substeps): the
+//    others are inactive at every substep, so skipping them changes nothing but the time.
+//    The search radius (the upper bound) then costs nothing per evaluation.
+//  - Frames without a valid term are not integrated at all.
+#include "motion_model_estimation/core/cost.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+#include "engine.h"
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/spatial_grid.h"
+
+namespace mme {
+
+namespace {
+
+/// One predicted frame: where its start state, target and bookkeeping live.
+struct WorkFrame {
+  size_t x_off;       // into pos: x(t) (occluded samples filled)
+  size_t v_off;       // into vel: v(t)
+  size_t target_off;  // into pos: x(t+1)
+  uint32_t valid_begin, valid_end;  // into valid: particles whose term enters the cost
+  uint32_t run_begin, run_end;      // into inter_runs: this frame's interaction candidates
+  double margin_m;                  // candidate slack for pairs closing in during the frame
+  uint64_t fixed_evals;             // installed bonds x substeps (interactions counted apart)
+  uint64_t bond_evals;              // at most (all candidates): balances parallel chunks
+};
+
+/// Per-thread scratch so evaluate() allocates nothing after its first call on a thread.
+struct Workspace {
+  detail::LawTable laws;
+  std::vector<SpringLaw> inter_laws;
+  std::vector<detail::SpringRun> runs;  // this frame's candidate prefixes
+  std::vector<double> x, v, f, local;
+};
+
+}  // namespace
+
+struct CostFunction::Impl {
+  int n = 0;
+  int substeps = 1;
+  double frame_period_s = 0.0;
+  double dt_s = 0.0;
+  detail::Engine engine;
+  detail::LawTable base_laws;
+  std::vector<ParamRef> free_refs;
+  std::vector<int> inter_type;          // bond type of each interaction
+  std::vector<double> inter_cutoff_m;   // candidate search radius of each interaction
+  std::vector<double> pos;              // T x 3N filled observed positions
+  std::vector<double> vel;              // frames x 3N start velocities
+  std::vector<int32_t> valid;
+  std::vector<detail::PairIdx> inter_pairs;
+  std::vector<double> inter_d0;  // length of each candidate pair at x(t), ascending per run
+  std::vector<detail::SpringRun> inter_runs;  // law = interaction index
+  std::vector<WorkFrame> frames;
+  uint64_t bond_evals = 0;
+  uint64_t terms = 0;
+
+  void prepareLaws(const std::vector<double>& values, Workspace* ws) const {
+    if (values.size() != free_refs.size()) {
+      std::ostringstream err;
+      err << "CostFunction: " << values.size() << " values for " << free_refs.size()
+          << " free parameters";
+      throw std::invalid_argument(err.str());
+    }
+    ws->laws = base_laws;  // reuses capacity: no allocation after the first call
+    for (size_t k = 0; k < values.size(); ++k) ws->laws.set(free_refs[k], values[k]);
+    ws->inter_laws.resize(inter_type.size());
+    for (size_t k = 0; k < inter_type.size(); ++k) {
+      SpringLaw law = ws->laws.spring[inter_type[k]];
+      // Pairs beyond the candidate radius were never listed; capping makes that explicit so
+      // the result does not depend on the candidate list's slack.
+      law.max_distance = std::min(law.max_distance, inter_cutoff_m[k]);
+      ws->inter_laws[k] = law;
+    }
+  }
+
+  void ensureScratch(Workspace* ws) const {
+    const size_t n3 = 3 * static_cast<size_t>(n);
+    if (ws->runs.capacity() < inter_type.size()) ws->runs.reserve(inter_type.size());
+    if (ws->x.size() < n3) {
+      ws->x.resize(n3);
+      ws->v.resize(n3);
+      ws->f.resize(n3);
+    }
+  }
+
+  /// Candidate prefixes of frame w within the current max_distance (+ margin) into ws->runs;
+  /// returns the number of pair evaluations one substep does.
+  uint64_t activeRuns(const WorkFrame& w, const SpringLaw* inter_laws, Workspace* ws) const {
+    ws->runs.clear();
+    uint64_t pairs = 0;
+    for (uint32_t r = w.run_begin; r < w.run_end; ++r) {
+      detail::SpringRun run = inter_runs[r];
+      const double limit_m = inter_laws[run.law].max_distance + w.margin_m;
+      run.end = static_cast<uint32_t>(
+          std::upper_bound(inter_d0.begin() + run.begin, inter_d0.begin() + run.end, limit_m) -
+          inter_d0.begin());
+      if (run.end > run.begin) {
+        ws->runs.push_back(run);
+        pairs += run.end - run.begin;
+      }
+    }
+    return pairs;
+  }
+
+  /// Predicts frames [f0, f1) and adds their squared errors into local (size n).
+  void run(const detail::LawTable& laws, const SpringLaw* inter_laws, size_t f0, size_t f1,
+           Workspace* ws, double* local) const {
+    ensureScratch(ws);
+    double* x = ws->x.data();
+    double* v = ws->v.data();
+    double* f = ws->f.data();
+    const size_t bytes = 3 * static_cast<size_t>(n) * sizeof(double);
+    for (size_t fr = f0; fr < f1; ++fr) {
+      const WorkFrame& w = frames[fr];
+      std::memcpy(x, pos.data() + w.x_off, bytes);
+      std::memcpy(v, vel.data() + w.v_off, bytes);
+      activeRuns(w, inter_laws, ws);
+      for (int s = 0; s < substeps; ++s) {
+        engine.forces(laws, x, v, f, inter_laws, inter_pairs.data(), ws->runs.data(),
+                      ws->runs.size());
+        engine.integrate(dt_s, f, x, v);
+        engine.clamp(laws, x);
+      }
+      const double* target = pos.data() + w.target_off;
+      for (uint32_t k = w.valid_begin; k < w.valid_end; ++k) {
+        const int i3 = 3 * valid[k];
+        const double dx = x[i3] - target[i3];
+        const double dy = x[i3 + 1] - target[i3 + 1];
+        const double dz = x[i3 + 2] - target[i3 + 2];
+        local[valid[k]] += dx * dx + dy * dy + dz * dz;
+      }
+    }
+  }
+};
+
+CostFunction::CostFunction(const Model& model, const Trajectory& trajectory)
+    : impl_(new Impl) {
+  Impl& m = *impl_;
+  const std::string err = validateModel(model);
+  if (!err.empty()) throw InputError("model: " + err);
+  const int n = static_cast<int>(model.particles.size());
+  const int num_frames = trajectory.numFrames();
+  if (trajectory.numMarkers() != n) {
+    std::ostringstream e;
+    e << "trajectory has " << trajectory.numMarkers() << " markers but the model has " << n
+      << " particles (remap the markers to the model's particles first)";
+    throw InputError(e.str());
+  }
+  if (trajectory.positions_m.size() != static_cast<size_t>(n) * num_frames ||
+      trajectory.occluded.size() != static_cast<size_t>(n) * num_frames)
+    throw InputError("trajectory: positions/occluded do not hold frames x markers samples");
+  if (num_frames < 1) throw InputError("trajectory has no frames");
+  const bool static_mode = num_frames == 1;
+  // A single frame has no time base of its own: the step must come from the model.
+  if (static_mode && !(model.frame_rate_hz > 0.0))
+    throw InputError("a single-frame (static equilibrium) data set needs the model's frame_rate_hz");
+  const double rate_hz = model.frame_rate_hz > 0.0 ? model.frame_rate_hz : trajectory.frame_rate_hz;
+  if (!(rate_hz > 0.0) || !std::isfinite(rate_hz))
+    throw InputError("no frame rate: set frame_rate_hz in the model or the data");
+
+  m.n = n;
+  m.substeps = model.substeps;
+  m.frame_period_s = 1.0 / rate_hz;
+  m.dt_s = m.frame_period_s / model.substeps;
+  m.engine = detail::Engine(model);
+  m.base_laws.load(model);
+  m.free_refs = mme::freeParameters(model);
+
+  // Interaction candidate radii: a fixed max_distance is exact; a free one uses its upper
+  // bound, or twice its initial value when unbounded (documented cap, see prepareLaws).
+  std::vector<uint8_t> inter_fixed_cutoff;
+  for (const Interaction& in : model.interactions) {
+    const BondType& type = model.bond_types[in.type];
+    const Param& p = type.param(kMaxDistance);
+    double cutoff = p.value;
+    if (p.free) {
+      if (p.has_max && std::isfinite(p.max)) {
+        cutoff = p.max;
+      } else if (p.has_value && p.value > 0.0) {
+        cutoff = 2.0 * p.value;
+      } else {
+        throw InputError("bond type '" + type.name +
+                         "': a free max_distance of an interaction needs a max bound or a "
+                         "positive initial value");
+      }
+    }
+    m.inter_type.push_back(in.type);
+    m.inter_cutoff_m.push_back(cutoff);
+    inter_fixed_cutoff.push_back(!p.free);
+  }
+
+  // Occluded samples get the last known position (else the first known, else the model's):
+  // finite values keep NaN out; the terms they could influence are dropped below.
+  const size_t n3 = 3 * static_cast<size_t>(n);
+  m.pos.assign(n3 * num_frames, 0.0);
+  for (int i = 0; i < n; ++i) {
+    int first_known = -1;
+    for (int t = 0; t < num_frames; ++t)
+      if (!trajectory.isOccluded(t, i)) { first_known = t; break; }
+    Eigen::Vector3d fill = first_known >= 0 ? trajectory.position(first_known, i)
+                                            : model.particles[i].position_m;
+    for (int t = 0; t < num_frames; ++t) {
+      if (!trajectory.isOccluded(t, i)) fill = trajectory.position(t, i);
+      for (int k = 0; k < 3; ++k) m.pos[t * n3 + 3 * i + k] = fill[k];
+    }
+  }
+
+  // Bond graph for the "within substeps hops" rule (CSR adjacency).
+  std::vector<std::vector<int>> adj_lists(n);
+  for (const Bond& b : model.bonds) {
+    const int arity = kindArity(model.bond_types[b.type].kind);
+    for (int p = 0; p < arity; ++p)
+      for (int q = 0; q < arity; ++q)
+        if (p != q) adj_lists[b.particles[p]].push_back(b.particles[q]);
+  }
+  // Groups involved in interactions, and for each such group its partner groups.
+  std::map<std::string, std::vector<int>> group_members;
+  for (const Interaction& in : model.interactions) {
+    group_members[in.group_a];
+    group_members[in.group_b];
+  }
+  for (int i = 0; i < n; ++i) {
+    auto it = group_members.find(model.particles[i].group);
+    if (it != group_members.end()) it->second.push_back(i);
+  }
+
+  SpatialGrid grid;
+  std::vector<std::vector<uint8_t>> in_a, in_b;
+  for (const Interaction& in : model.interactions) {
+    in_a.emplace_back(n, 0);
+    in_b.emplace_back(n, 0);
+    for (int i = 0; i < n; ++i) {
+      in_a.back()[i] = model.particles[i].group == in.group_a;
+      in_b.back()[i] = model.particles[i].group == in.group_b;
+    }
+  }
+  std::vector<Eigen::Vector3d> frame_points(n);
+  std::vector<std::pair<int, int>> found;
+
+  std::vector<uint8_t> dropped(n), frontier_mark(n);
+  std::vector<int> frontier, next;
+  const int t_first = static_mode ? 0 : 1;
+  const int t_last = static_mode ? 0 : num_frames - 2;  // inclusive
+  for (int t = t_first; t <= t_last; ++t) {
+    const int tp = static_mode ? 0 : t - 1, tn = static_mode ? 0 : t + 1;
+    // Particles lacking x(t) or x(t-1), spread `substeps` hops over the bond graph: a force
+    // reaches one bond further per substep.
+    std::fill(dropped.begin(), dropped.end(), 0);
+    frontier.clear();
+    for (int i = 0; i < n; ++i)
+      if (trajectory.isOccluded(t, i) || trajectory.isOccluded(tp, i)) {
+        dropped[i] = 1;
+        frontier.push_back(i);
+      }
+    // Interaction groups: a missing member makes every partner group's neighbourhood unknown.
+    for (const Interaction& in : model.interactions) {
+      bool miss_a = false, miss_b = false;
+      // == 1: only particles actually missing (2 marks group drops of earlier interactions).
+      for (int i : group_members[in.group_a]) miss_a = miss_a || dropped[i] == 1;
+      for (int i : group_members[in.group_b]) miss_b = miss_b || dropped[i] == 1;
+      std::vector<int>& drop_b = group_members[in.group_b];
+      std::vector<int>& drop_a = group_members[in.group_a];
+      if (miss_a)
+        for (int i : drop_b) dropped[i] = dropped[i] ? dropped[i] : 2;
+      if (miss_b)
+        for (int i : drop_a) dropped[i] = dropped[i] ? dropped[i] : 2;
+    }
+    for (int hop = 0; hop < m.substeps && !frontier.empty(); ++hop) {
+      next.clear();
+      for (int i : frontier)
+        for (int j : adj_lists[i])
+          if (dropped[j] != 1) {
+            dropped[j] = 1;
+            next.push_back(j);
+          }
+      frontier.swap(next);
+    }
+    WorkFrame w{};
+    w.valid_begin = static_cast<uint32_t>(m.valid.size());
+    for (int i = 0; i < n; ++i)
+      if (!dropped[i] && !trajectory.isOccluded(tn, i)) m.valid.push_back(i);
+    w.valid_end = static_cast<uint32_t>(m.valid.size());
+    if (w.valid_end == w.valid_begin) continue;  // nothing to compare: skip the frame's work
+
+    w.x_off = static_cast<size_t>(t) * n3;
+    w.target_off = static_cast<size_t>(tn) * n3;
+    w.v_off = m.vel.size();
+    m.vel.resize(m.vel.size() + n3, 0.0);
+    double* v = m.vel.data() + w.v_off;
+    const double* xt = m.pos.data() + t * n3;
+    const double* xp = m.pos.data() + tp * n3;
+    for (int i = 0; i < n; ++i) {
+      const Particle& p = model.particles[i];
+      for (int k = 0; k < 3; ++k) {
+        double vk = 0.0;  // unknown or static: at rest
+        if (p.fixed) {
+          vk = p.velocity_mps[k];  // what the simulator keeps for a fixed particle
+        } else if (!static_mode && !trajectory.isOccluded(t, i) && !trajectory.isOccluded(tp, i)) {
+          vk = (xt[3 * i + k] - xp[3 * i + k]) / m.frame_period_s;
+        }
+        v[3 * i + k] = vk;
+      }
+    }
+
+    w.run_begin = static_cast<uint32_t>(m.inter_runs.size());
+    uint64_t candidates = 0;
+    double margin_all_m = 0.0;
+    if (!model.interactions.empty()) {
+      // With substeps the simulator re-finds neighbours every substep; pairs that come within
+      // max_distance during the frame must already be candidates. A fixed max_distance gets a
+      // margin of twice the fastest observed displacement over the frame (a free one is
+      // searched up to its upper bound, which already leaves room).
+      double margin_m = 0.0;
+      if (m.substeps > 1) {
+        double vmax2 = 0.0;
+        for (int i = 0; i < n; ++i)
+          vmax2 = std::max(vmax2, v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1] +
+                                      v[3 * i + 2] * v[3 * i + 2]);
+        margin_m = 2.0 * std::sqrt(vmax2) * m.frame_period_s;
+      }
+      margin_all_m = margin_m;
+      double frame_cell_m = 0.0;
+      std::vector<double> radius_m(m.inter_type.size(), 0.0);
+      for (size_t k = 0; k < m.inter_type.size(); ++k) {
+        const double c = m.inter_cutoff_m[k];
+        if (!(c > 0.0) || !std::isfinite(c)) continue;
+        radius_m[k] = c + (inter_fixed_cutoff[k] ? margin_m : 0.0);
+        frame_cell_m = std::max(frame_cell_m, radius_m[k]);
+      }
+      for (int i = 0; i < n; ++i)
+        frame_points[i] = Eigen::Vector3d(xt[3 * i], xt[3 * i + 1], xt[3 * i + 2]);
+      if (frame_cell_m > 0.0) grid.build(frame_points, frame_cell_m);
+      for (size_t k = 0; k < m.inter_type.size(); ++k) {
+        const double cutoff = radius_m[k];
+        if (!(cutoff > 0.0)) continue;
+        found.clear();
+        grid.pairsWithin(frame_points, cutoff, in_a[k], in_b[k], &found);
+        if (found.empty()) continue;
+        detail::SpringRun run{static_cast<int32_t>(k), static_cast<uint32_t>(m.inter_pairs.size()), 0};
+        std::vector<std::pair<double, std::pair<int, int>>> by_length;
+        by_length.reserve(found.size());
+        for (const auto& p : found)
+          by_length.push_back({(frame_points[p.first] - frame_points[p.second]).norm(), p});
+        std::stable_sort(by_length.begin(), by_length.end(),
+                         [](const auto& a, const auto& b) { return a.first < b.first; });
+        for (const auto& e : by_length) {
+          m.inter_pairs.push_back({e.second.first, e.second.second});
+          m.inter_d0.push_back(e.first);
+        }
+        run.end = static_cast<uint32_t>(m.inter_pairs.size());
+        candidates += run.end - run.begin;
+        m.inter_runs.push_back(run);
+      }
+    }
+    w.run_end = static_cast<uint32_t>(m.inter_runs.size());
+    w.margin_m = m.substeps > 1 ? margin_all_m : 0.0;
+    w.fixed_evals = static_cast<uint64_t>(m.substeps) * (m.engine.numSprings() + m.engine.numFlexions());
+    w.bond_evals = w.fixed_evals + static_cast<uint64_t>(m.substeps) * candidates;
+    m.bond_evals += w.bond_evals;
+    m.terms += w.valid_end - w.valid_begin;
+    m.frames.push_back(w);
+  }
+  if (m.inter_pairs.size() > static_cast<size_t>(UINT32_MAX))
+    throw InputError("too many interaction candidate pairs");
+}
+
+CostFunction::~CostFunction() = default;
+
+const std::vector<ParamRef>& CostFunction::freeParameters() const { return impl_->free_refs; }
+
+double CostFunction::evaluate(const std::vector<double>& free_values,
+                              std::vector<double>* local_costs) const {
+  thread_local Workspace ws;
+  const Impl& m = *impl_;
+  m.prepareLaws(free_values, &ws);
+  std::vector<double>& local = local_costs ? *local_costs : ws.local;
+  local.assign(m.n, 0.0);
+  m.run(ws.laws, ws.inter_laws.data(), 0, m.frames.size(), &ws, local.data());
+  double total = 0.0;
+  for (double c : local) total += c;
+  return total;
+}
+
+double CostFunction::evaluateParallel(const std::vector<double>& free_values,
+                                      std::vector<double>* local_costs, int threads) const {
+  const Impl& m = *impl_;
+  const size_t num_chunks =
+      std::min(static_cast<size_t>(std::max(threads, 1)), m.frames.size());
+  if (num_chunks <= 1) return evaluate(free_values, local_costs);
+
+  thread_local Workspace ws0;
+  m.prepareLaws(free_values, &ws0);
+  // Contiguous chunks of about equal work (frames differ by their interaction candidates);
+  // boundaries depend only on the thread count, so the result is reproducible.
+  std::vector<size_t> bounds(num_chunks + 1, m.frames.size());
+  bounds[0] = 0;
+  {
+    uint64_t acc = 0;
+    size_t c = 1;
+    for (size_t fr = 0; fr < m.frames.size() && c < num_chunks; ++fr) {
+      acc += m.frames[fr].bond_evals;
+      while (c < num_chunks && acc * num_chunks >= m.bond_evals * c) bounds[c++] = fr + 1;
+    }
+    for (size_t k = 1; k <= num_chunks; ++k) bounds[k] = std::max(bounds[k], bounds[k - 1]);
+  }
+  // Plain references: naming the thread_local inside the lambda would reach the worker's own
+  // (empty) instance.
+  const detail::LawTable& laws = ws0.laws;
+  const SpringLaw* inter_laws = ws0.inter_laws.data();
+  std::vector<std::vector<double>> locals(num_chunks, std::vector<double>(m.n, 0.0));
+  std::vector<Workspace> spaces(num_chunks - 1);
+  // Sized here so nothing in a worker allocates (an exception there would terminate).
+  for (Workspace& w : spaces) m.ensureScratch(&w);
+  std::vector<std::thread> pool;
+  pool.reserve(num_chunks - 1);
+  for (size_t c = 1; c < num_chunks; ++c)
+    pool.emplace_back([&m, &laws, inter_laws, &bounds, &spaces, &locals, c]() {
+      m.run(laws, inter_laws, bounds[c], bounds[c + 1], &spaces[c - 1], locals[c].data());
+    });
+  m.run(laws, inter_laws, bounds[0], bounds[1], &ws0, locals[0].data());
+  for (std::thread& th : pool) th.join();
+
+  std::vector<double>& local = local_costs ? *local_costs : ws0.local;
+  local.assign(m.n, 0.0);
+  for (size_t c = 0; c < num_chunks; ++c)  // chunk order: deterministic
+    for (int i = 0; i < m.n; ++i) local[i] += locals[c][i];
+  double total = 0.0;
+  for (double c : local) total += c;
+  return total;
+}
+
+uint64_t CostFunction::bondEvaluationsPerCall() const { return impl_->bond_evals; }
+
+uint64_t CostFunction::bondEvaluationsFor(const std::vector<double>& free_values) const {
+  Workspace ws;
+  impl_->prepareLaws(free_values, &ws);
+  uint64_t total = 0;
+  for (const WorkFrame& w : impl_->frames)
+    total += w.fixed_evals +
+             static_cast<uint64_t>(impl_->substeps) * impl_->activeRuns(w, ws.inter_laws.data(), &ws);
+  return total;
+}
+uint64_t CostFunction::termCount() const { return impl_->terms; }
+int CostFunction::numParticles() const { return impl_->n; }
+
+}  // namespace mme

@@ -1,0 +1,365 @@
+// Simulator, and the Engine (compiled motion law) it shares with the cost function.
+#include "motion_model_estimation/core/simulator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "engine.h"
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/spatial_grid.h"
+
+namespace mme {
+
+namespace {
+// Flat x,y,z view of a vector of Eigen 3-vectors (contiguous, no padding: see static_assert).
+double* flat(std::vector<Eigen::Vector3d>& v) { return v.empty() ? nullptr : v[0].data(); }
+const double* flat(const std::vector<Eigen::Vector3d>& v) {
+  return v.empty() ? nullptr : v[0].data();
+}
+}  // namespace
+
+static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double),
+              "State vectors are used as flat x,y,z arrays");
+
+namespace detail {
+
+// ------------------------------------------------------------------ laws
+
+SpringLaw springLawOf(const BondType& type) {
+  SpringLaw law;
+  law.stiffness = type.value(kStiffness);
+  law.rest_length = type.value(kRestLength);
+  law.damping = type.value(kDamping);
+  law.stiffness_nl = type.value(kStiffnessNl);
+  law.damping_nl = type.value(kDampingNl);
+  law.min_distance = type.value(kMinDistance);
+  law.max_distance = type.param(kMaxDistance).present ? type.param(kMaxDistance).value
+                                                      : kNoMaxDistance_m;
+  return law;
+}
+
+FlexionLaw flexionLawOf(const BondType& type) {
+  FlexionLaw law;
+  law.stiffness = type.value(kStiffness);
+  law.rest_angle = type.value(kRestAngle);
+  law.damping = type.value(kDamping);
+  return law;
+}
+
+void LawTable::load(const Model& model) {
+  const size_t nt = model.bond_types.size();
+  spring.assign(nt, SpringLaw());
+  flexion.assign(nt, FlexionLaw());
+  viscosity_nspm.assign(nt, 0.0);
+  max_elongation.assign(nt, 0.0);
+  for (size_t t = 0; t < nt; ++t) {
+    const BondType& type = model.bond_types[t];
+    spring[t] = springLawOf(type);
+    flexion[t] = flexionLawOf(type);
+    viscosity_nspm[t] = type.value(kViscosity);
+    max_elongation[t] = type.value(kMaxElongation);
+  }
+  const Eigen::Vector3d g = model.gravity();
+  for (int k = 0; k < 3; ++k) gravity_mps2[k] = g[k];
+}
+
+void LawTable::set(const ParamRef& ref, double value) {
+  if (ref.bond_type < 0) {
+    gravity_mps2[ref.param] = value;
+    return;
+  }
+  const size_t t = static_cast<size_t>(ref.bond_type);
+  SpringLaw& s = spring[t];
+  FlexionLaw& fl = flexion[t];
+  // A parameter id means the same thing in both law forms where both have it; writing both
+  // keeps this independent of the type's kind (the unused form is never read).
+  switch (ref.param) {
+    case kStiffness: s.stiffness = value; fl.stiffness = value; break;
+    case kRestLength: s.rest_length = value; break;
+    case kDamping: s.damping = value; fl.damping = value; break;
+    case kStiffnessNl: s.stiffness_nl = value; break;
+    case kDampingNl: s.damping_nl = value; break;
+    case kMinDistance: s.min_distance = value; break;
+    case kMaxDistance: s.max_distance = value; break;
+    case kMaxElongation: max_elongation[t] = value; break;
+    case kRestAngle: fl.rest_angle = value; break;
+    case kViscosity: viscosity_nspm[t] = value; break;
+    default: break;
+  }
+}
+
+// ------------------------------------------------------------------ engine
+
+Engine::Engine(const Model& model) {
+  n_ = static_cast<int>(model.particles.size());
+  inv_mass3_.assign(3 * n_, 0.0);
+  mobile3_.assign(3 * n_, 0.0);
+  mass_.assign(n_, 0.0);
+  fixed_.assign(n_, 0);
+  for (int i = 0; i < n_; ++i) {
+    const Particle& p = model.particles[i];
+    mass_[i] = p.mass_kg;
+    fixed_[i] = p.fixed ? 1 : 0;
+    for (int k = 0; k < 3; ++k) {
+      inv_mass3_[3 * i + k] = p.fixed ? 0.0 : 1.0 / p.mass_kg;
+      mobile3_[3 * i + k] = p.fixed ? 0.0 : 1.0;
+    }
+  }
+  // Springs grouped by type: the law is then loop-invariant and the kernel variant is chosen
+  // once per run. Inside a type, bond order is kept.
+  const int nt = static_cast<int>(model.bond_types.size());
+  for (int t = 0; t < nt; ++t) {
+    const BondType& type = model.bond_types[t];
+    if (type.kind != BondKind::kSpring) continue;
+    SpringRun run{t, static_cast<uint32_t>(spring_pairs_.size()), 0};
+    for (const Bond& b : model.bonds)
+      if (b.type == t) spring_pairs_.push_back({b.particles[0], b.particles[1]});
+    run.end = static_cast<uint32_t>(spring_pairs_.size());
+    if (run.end > run.begin) spring_runs_.push_back(run);
+  }
+  for (const Bond& b : model.bonds) {
+    const BondType& type = model.bond_types[b.type];
+    switch (type.kind) {
+      case BondKind::kFlexion:
+        flexions_.push_back({b.particles[0], b.particles[1], b.particles[2], b.type});
+        break;
+      case BondKind::kViscosity: unary_.push_back({b.particles[0], b.type}); break;
+      case BondKind::kSpring:
+        if (type.param(kMaxElongation).present)
+          clamps_.push_back({b.particles[0], b.particles[1], b.type});
+        break;
+    }
+  }
+}
+
+void Engine::forces(const LawTable& laws, const double* x, const double* v, double* f,
+                    const SpringLaw* inter_laws, const PairIdx* inter_pairs,
+                    const SpringRun* inter_runs, size_t num_inter_runs) const {
+  const double gx = laws.gravity_mps2[0], gy = laws.gravity_mps2[1], gz = laws.gravity_mps2[2];
+  for (int i = 0; i < n_; ++i) {
+    const double m = mass_[i];
+    f[3 * i] = m * gx;
+    f[3 * i + 1] = m * gy;
+    f[3 * i + 2] = m * gz;
+  }
+  for (const UnaryBond& u : unary_) {
+    const double c = laws.viscosity_nspm[u.type];
+    const int p = 3 * u.p;
+    f[p] -= c * v[p];
+    f[p + 1] -= c * v[p + 1];
+    f[p + 2] -= c * v[p + 2];
+  }
+  for (const SpringRun& run : spring_runs_)
+    springRun(laws.spring[run.law], spring_pairs_.data(), run.begin, run.end, x, v, f);
+  for (const FlexionBond& b : flexions_) {
+    const int a = 3 * b.a, m = 3 * b.b, c = 3 * b.c;
+    flexionForceRaw(laws.flexion[b.type], x + a, x + m, x + c, v + a, v + m, v + c, f + a, f + m,
+                    f + c);
+  }
+  for (size_t r = 0; r < num_inter_runs; ++r) {
+    const SpringRun& run = inter_runs[r];
+    springRun(inter_laws[run.law], inter_pairs, run.begin, run.end, x, v, f);
+  }
+}
+
+void Engine::integrate(double dt_s, const double* __restrict f, double* __restrict x,
+                       double* __restrict v) const {
+  // Per-component scale arrays instead of a fixed-flag branch: one vectorisable loop.
+  const double* __restrict im = inv_mass3_.data();
+  const double* __restrict mob = mobile3_.data();
+  const int n3 = 3 * n_;
+  for (int k = 0; k < n3; ++k) {
+    v[k] += dt_s * (f[k] * im[k]);
+    x[k] += (dt_s * mob[k]) * v[k];
+  }
+}
+
+void Engine::clamp(const LawTable& laws, double* x) const {
+  for (const ClampBond& b : clamps_) {
+    const double max_len = (1.0 + laws.max_elongation[b.type]) * laws.spring[b.type].rest_length;
+    double* xa = x + 3 * b.a;
+    double* xb = x + 3 * b.b;
+    const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2];
+    const double l = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(l > max_len)) continue;
+    const bool fa = fixed_[b.a] != 0, fb = fixed_[b.b] != 0;
+    if (fa && fb) continue;
+    // Fraction of d to remove; split evenly unless one end is fixed.
+    const double r = (l - max_len) / l;
+    const double wa = fa ? 0.0 : (fb ? 1.0 : 0.5);
+    const double wb = fb ? 0.0 : (fa ? 1.0 : 0.5);
+    xa[0] += wa * r * dx; xa[1] += wa * r * dy; xa[2] += wa * r * dz;
+    xb[0] -= wb * r * dx; xb[1] -= wb * r * dy; xb[2] -= wb * r * dz;
+  }
+}
+
+double Engine::bondEnergy(const LawTable& laws, const double* x) const {
+  double e = 0.0;
+  for (const SpringRun& run : spring_runs_)
+    for (uint32_t k = run.begin; k < run.end; ++k)
+      e += springEnergyRaw(laws.spring[run.law], x + 3 * spring_pairs_[k].a,
+                           x + 3 * spring_pairs_[k].b);
+  for (const FlexionBond& b : flexions_)
+    e += flexionEnergyRaw(laws.flexion[b.type], x + 3 * b.a, x + 3 * b.b, x + 3 * b.c);
+  return e;
+}
+
+}  // namespace detail
+
+// ------------------------------------------------------------------ simulator
+
+struct Simulator::Impl {
+  detail::Engine engine;
+  detail::LawTable laws;
+  int substeps = 1;
+  struct Inter {
+    int type;
+    std::vector<uint8_t> in_a, in_b;
+  };
+  std::vector<Inter> inters;
+  SpatialGrid grid;
+  std::vector<std::pair<int, int>> found;
+  std::vector<detail::PairIdx> inter_pairs;
+  std::vector<detail::SpringRun> inter_runs;
+  std::vector<double> f;
+  std::vector<double> mass;
+  State initial;
+  size_t last_count = 0;
+
+  /// Interaction springs at positions x: one run per interaction (law = its bond type).
+  void findInteractions(const std::vector<Eigen::Vector3d>& x) {
+    inter_pairs.clear();
+    inter_runs.clear();
+    last_count = 0;
+    if (inters.empty()) return;
+    double cell = 0.0;
+    for (const Inter& in : inters) {
+      const double c = laws.spring[in.type].max_distance;
+      if (c > cell && std::isfinite(c)) cell = c;
+    }
+    if (!(cell > 0.0)) return;
+    grid.build(x, cell);
+    for (size_t k = 0; k < inters.size(); ++k) {
+      const Inter& in = inters[k];
+      const double cutoff = laws.spring[in.type].max_distance;
+      if (!(cutoff > 0.0) || !std::isfinite(cutoff)) continue;
+      found.clear();
+      grid.pairsWithin(x, cutoff, in.in_a, in.in_b, &found);
+      detail::SpringRun run{in.type, static_cast<uint32_t>(inter_pairs.size()), 0};
+      for (const auto& p : found) inter_pairs.push_back({p.first, p.second});
+      run.end = static_cast<uint32_t>(inter_pairs.size());
+      inter_runs.push_back(run);
+    }
+    last_count = inter_pairs.size();
+  }
+
+  void forces(const State& s) {
+    findInteractions(s.x_m);
+    f.resize(3 * static_cast<size_t>(engine.numParticles()));
+    engine.forces(laws, flat(s.x_m), flat(s.v_mps), f.data(),
+                  laws.spring.data(), inter_pairs.data(), inter_runs.data(), inter_runs.size());
+  }
+};
+
+Simulator::Simulator(const Model& model) : impl_(new Impl) {
+  const std::string err = validateModel(model);
+  if (!err.empty()) throw InputError("model: " + err);
+  impl_->engine = detail::Engine(model);
+  impl_->laws.load(model);
+  impl_->substeps = model.substeps;
+  const size_t n = model.particles.size();
+  for (const Particle& p : model.particles) {
+    impl_->mass.push_back(p.mass_kg);
+    impl_->initial.x_m.push_back(p.position_m);
+    impl_->initial.v_mps.push_back(p.velocity_mps);
+  }
+  for (const Interaction& in : model.interactions) {
+    Impl::Inter c{in.type, std::vector<uint8_t>(n, 0), std::vector<uint8_t>(n, 0)};
+    for (size_t i = 0; i < n; ++i) {
+      c.in_a[i] = model.particles[i].group == in.group_a;
+      c.in_b[i] = model.particles[i].group == in.group_b;
+    }
+    impl_->inters.push_back(std::move(c));
+  }
+}
+
+Simulator::~Simulator() = default;
+Simulator::Simulator(Simulator&&) noexcept = default;
+Simulator& Simulator::operator=(Simulator&&) noexcept = default;
+
+void Simulator::setParameters(const Model& model) { impl_->laws.load(model); }
+
+State Simulator::initialState() const { return impl_->initial; }
+
+void Simulator::computeForces(const State& s, std::vector<Eigen::Vector3d>* forces_n) {
+  const size_t n = static_cast<size_t>(impl_->engine.numParticles());
+  if (s.x_m.size() != n || s.v_mps.size() != n)
+    throw std::invalid_argument("Simulator: state size differs from the particle count");
+  impl_->forces(s);
+  forces_n->resize(n);
+  for (size_t i = 0; i < n; ++i)
+    (*forces_n)[i] = Eigen::Vector3d(impl_->f[3 * i], impl_->f[3 * i + 1], impl_->f[3 * i + 2]);
+}
+
+void Simulator::step(State* s, double dt_s) {
+  const size_t n = static_cast<size_t>(impl_->engine.numParticles());
+  if (s->x_m.size() != n || s->v_mps.size() != n)
+    throw std::invalid_argument("Simulator: state size differs from the particle count");
+  impl_->forces(*s);
+  double* x = flat(s->x_m);
+  impl_->engine.integrate(dt_s, impl_->f.data(), x, flat(s->v_mps));
+  impl_->engine.clamp(impl_->laws, x);
+}
+
+void Simulator::stepFrame(State* s, double frame_period_s) {
+  const double dt_s = frame_period_s / impl_->substeps;
+  for (int k = 0; k < impl_->substeps; ++k) step(s, dt_s);
+}
+
+double Simulator::totalEnergy(const State& s) {
+  const size_t n = static_cast<size_t>(impl_->engine.numParticles());
+  if (s.x_m.size() != n || s.v_mps.size() != n)
+    throw std::invalid_argument("Simulator: state size differs from the particle count");
+  const double* x = flat(s.x_m);
+  double kinetic = 0.0, gravitational = 0.0;
+  const double* g = impl_->laws.gravity_mps2;
+  for (size_t i = 0; i < n; ++i) {
+    const double m = impl_->mass[i];
+    kinetic += 0.5 * m * s.v_mps[i].squaredNorm();
+    gravitational -= m * (g[0] * x[3 * i] + g[1] * x[3 * i + 1] + g[2] * x[3 * i + 2]);
+  }
+  double elastic = impl_->engine.bondEnergy(impl_->laws, x);
+  impl_->findInteractions(s.x_m);
+  for (const detail::SpringRun& run : impl_->inter_runs)
+    for (uint32_t k = run.begin; k < run.end; ++k)
+      elastic += detail::springEnergyRaw(impl_->laws.spring[run.law],
+                                         x + 3 * impl_->inter_pairs[k].a,
+                                         x + 3 * impl_->inter_pairs[k].b);
+  return kinetic + elastic + gravitational;
+}
+
+size_t Simulator::lastInteractionBondCount() const { return impl_->last_count; }
+
+Trajectory simulateTrajectory(const Model& model, int num_frames, double frame_rate_hz) {
+  if (!(frame_rate_hz > 0.0) || !std::isfinite(frame_rate_hz))
+    throw InputError("simulate: frame rate must be > 0");
+  if (num_frames < 0) throw InputError("simulate: frame count must be >= 0");
+  Simulator sim(model);
+  Trajectory traj;
+  for (const Particle& p : model.particles) traj.marker_names.push_back(p.name);
+  traj.frame_rate_hz = frame_rate_hz;
+  traj.resize(num_frames);
+  std::fill(traj.occluded.begin(), traj.occluded.end(), 0);
+  State s = sim.initialState();
+  const int n = static_cast<int>(model.particles.size());
+  const double period_s = 1.0 / frame_rate_hz;
+  for (int t = 0; t < num_frames; ++t) {
+    if (t > 0) sim.stepFrame(&s, period_s);
+    for (int i = 0; i < n; ++i) traj.position(t, i) = s.x_m[i];
+  }
+  return traj;
+}
+
+}  // namespace mme

@@ -1,0 +1,81 @@
+#include "motion_model_estimation/core/trajectory.h"
+
+#include <cmath>
+#include <random>
+#include <sstream>
+
+namespace mme {
+
+void Trajectory::resize(int num_frames) {
+  const size_t n = marker_names.size();
+  times_s.resize(num_frames);
+  frame_numbers.resize(num_frames);
+  for (int t = 0; t < num_frames; ++t) {
+    times_s[t] = frame_rate_hz > 0.0 ? t / frame_rate_hz : 0.0;
+    frame_numbers[t] = static_cast<uint32_t>(t);
+  }
+  positions_m.assign(n * num_frames, Eigen::Vector3d::Zero());
+  occluded.assign(n * num_frames, 1);
+}
+
+size_t Trajectory::countOccluded() const {
+  size_t count = 0;
+  for (uint8_t o : occluded) count += o != 0;
+  return count;
+}
+
+std::string Trajectory::validate() const {
+  const size_t expected = marker_names.size() * times_s.size();
+  if (frame_numbers.size() != times_s.size()) return "frame_numbers and times_s differ in length";
+  if (positions_m.size() != expected || occluded.size() != expected)
+    return "positions/occluded do not hold frames x markers samples";
+  for (size_t k = 0; k < positions_m.size(); ++k)
+    if (!occluded[k] && !positions_m[k].allFinite()) {
+      std::ostringstream err;
+      err << "non-finite position at frame " << k / marker_names.size() << ", marker '"
+          << marker_names[k % marker_names.size()] << "'";
+      return err.str();
+    }
+  return "";
+}
+
+Trajectory remapMarkers(const Trajectory& in, const std::vector<std::string>& names,
+                        std::vector<std::string>* missing) {
+  Trajectory out;
+  out.marker_names = names;
+  out.frame_rate_hz = in.frame_rate_hz;
+  out.resize(in.numFrames());
+  out.times_s = in.times_s;
+  out.frame_numbers = in.frame_numbers;
+  if (missing) missing->clear();
+  for (size_t j = 0; j < names.size(); ++j) {
+    int src = -1;
+    for (int i = 0; i < in.numMarkers(); ++i)
+      if (in.marker_names[i] == names[j]) { src = i; break; }
+    if (src < 0) {
+      if (missing) missing->push_back(names[j]);
+      continue;
+    }
+    for (int t = 0; t < in.numFrames(); ++t) {
+      out.position(t, static_cast<int>(j)) = in.position(t, src);
+      out.occluded[t * names.size() + j] = in.occluded[t * in.numMarkers() + src];
+    }
+  }
+  return out;
+}
+
+void addGaussianNoise(Trajectory* trajectory, double noise_std_m, uint64_t seed) {
+  if (noise_std_m <= 0.0) return;
+  std::mt19937_64 rng(seed);
+  // Uniform in (0, 1]: 53 random bits, never 0 so the log is finite.
+  auto uniform = [&rng]() { return (static_cast<double>(rng() >> 11) + 1.0) * 0x1.0p-53; };
+  for (size_t k = 0; k < trajectory->positions_m.size(); ++k) {
+    if (trajectory->occluded[k]) continue;
+    for (int c = 0; c < 3; ++c) {
+      const double r = std::sqrt(-2.0 * std::log(uniform()));
+      trajectory->positions_m[k][c] += noise_std_m * r * std::cos(2.0 * M_PI * uniform());
+    }
+  }
+}
+
+}  // namespace mme

@@ -1,0 +1,381 @@
+#include "motion_model_estimation/identification/evolution_strategy.h"
+
+#include <nlopt.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <thread>
+
+#include "motion_model_estimation/core/error.h"
+
+namespace mme {
+
+std::string validateOptions(const EsOptions& o) {
+  if (o.population < 2) return "population must be >= 2";
+  if (o.offspring < 1) return "offspring must be >= 1";
+  if (o.threads < 1) return "threads must be >= 1";
+  const double shares[] = {o.share_new, o.share_partly_new, o.share_replica,
+                           o.share_partial_replica, o.share_crossover};
+  double total = 0.0;
+  for (double s : shares) {
+    if (!(s >= 0.0) || !std::isfinite(s)) return "operator shares must be >= 0";
+    total += s;
+  }
+  if (!(total > 0.0)) return "at least one operator share must be > 0";
+  if (o.tournament_size < 1) return "tournament_size must be >= 1";
+  if (!(o.elite_fraction >= 0.0 && o.elite_fraction <= 1.0))
+    return "elite_fraction must be in [0, 1]";
+  if (!(o.initial_mutability > 0.0 && o.initial_mutability <= 1.0))
+    return "initial_mutability must be in (0, 1]";
+  if (o.refine_start_generation < 0 || o.refine_period < 0 || o.refine_max_evaluations < 0)
+    return "refinement settings must be >= 0";
+  if (o.refine_algorithm != "bobyqa" && o.refine_algorithm != "newuoa" &&
+      o.refine_algorithm != "praxis")
+    return "refine_algorithm must be bobyqa, newuoa or praxis";
+  return "";
+}
+
+EvolutionStrategy::EvolutionStrategy(ParameterSpace space, const EsOptions& options)
+    : space_(std::move(space)), options_(options), random_(options.seed) {
+  const std::string bad = validateOptions(options_);
+  if (!bad.empty()) throw InputError("evolution strategy: " + bad);
+  if (space_.size() == 0) throw InputError("the model has no free parameter to identify");
+  operator_counts_.assign(7, 0);
+  operator_successes_.assign(7, 0);
+}
+
+void EvolutionStrategy::setCostFunction(std::shared_ptr<const CostFunction> cost) {
+  if (cost->freeParameters().size() != space_.size())
+    throw InputError("cost function and parameter space disagree on the free parameters");
+  cost_ = std::move(cost);
+  if (!population_.empty()) {
+    evaluate(&population_);
+    best_index_ = static_cast<int>(
+        std::min_element(population_.begin(), population_.end(),
+                         [](const Individual& a, const Individual& b) { return a.cost < b.cost; }) -
+        population_.begin());
+  }
+}
+
+void EvolutionStrategy::reset() {
+  population_.clear();
+  generation_ = 0;
+  best_index_ = 0;
+}
+
+void EvolutionStrategy::setPopulation(std::vector<Individual> population) {
+  population_ = std::move(population);
+  best_index_ = 0;
+  for (size_t i = 1; i < population_.size(); ++i)
+    if (population_[i].cost < population_[best_index_].cost) best_index_ = static_cast<int>(i);
+}
+
+const Individual& EvolutionStrategy::best() const {
+  if (population_.empty()) throw std::logic_error("EvolutionStrategy::best before step");
+  return population_[best_index_];
+}
+
+std::vector<double> EvolutionStrategy::bestValues() const {
+  return space_.toPhysical(best().genes);
+}
+
+Individual EvolutionStrategy::makeRandom() {
+  Individual ind;
+  const size_t n = space_.size();
+  ind.genes.resize(n);
+  ind.mutability.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    ind.genes[k] = space_.sampleInitial(k, random_);
+    const Gene& g = space_.gene(k);
+    ind.mutability[k] = options_.initial_mutability * (g.upper - g.lower);
+  }
+  return ind;
+}
+
+void EvolutionStrategy::evaluate(std::vector<Individual>* individuals) {
+  if (!cost_) throw std::logic_error("EvolutionStrategy: no cost function set");
+  auto work = [this, individuals](size_t first, size_t stride) {
+    for (size_t i = first; i < individuals->size(); i += stride) {
+      Individual& ind = (*individuals)[i];
+      ind.cost = cost_->evaluate(space_.toPhysical(ind.genes), &ind.local_costs);
+      if (!std::isfinite(ind.cost)) ind.cost = std::numeric_limits<double>::infinity();
+    }
+  };
+  // Each individual's cost depends only on its genes, so the split over threads cannot change
+  // the result: determinism holds for any thread count.
+  const size_t threads = std::min<size_t>(options_.threads, individuals->size());
+  if (threads <= 1) {
+    work(0, 1);
+  } else {
+    std::vector<std::thread> pool;
+    for (size_t t = 1; t < threads; ++t) pool.emplace_back(work, t, threads);
+    work(0, threads);
+    for (std::thread& th : pool) th.join();
+  }
+  evaluations_ += individuals->size();
+}
+
+int EvolutionStrategy::chooseParent(const std::vector<int>& sites) {
+  auto score = [&](int i) {
+    if (sites.empty()) return population_[i].cost;
+    double s = 0.0;
+    for (int p : sites) s += population_[i].local_costs[p];
+    return s;
+  };
+  int best = random_.index(static_cast<int>(population_.size()));
+  double best_score = score(best);
+  for (int k = 1; k < options_.tournament_size; ++k) {
+    const int c = random_.index(static_cast<int>(population_.size()));
+    const double s = score(c);
+    if (s < best_score) { best = c; best_score = s; }
+  }
+  return best;
+}
+
+void EvolutionStrategy::mutateGenes(Individual* child, const std::vector<int>& genes) {
+  // Self-adaptation (Schwefel): the mutability moves log-normally, then the gene moves with it;
+  // mutabilities that produced good children survive with them.
+  const double n = static_cast<double>(genes.size());
+  const double tau_global = 1.0 / std::sqrt(2.0 * n);
+  const double tau_local = 1.0 / std::sqrt(2.0 * std::sqrt(n));
+  const double common = tau_global * random_.normal();
+  for (int k : genes) {
+    const Gene& g = space_.gene(k);
+    const double range = g.upper - g.lower;
+    double sigma = child->mutability[k] * std::exp(common + tau_local * random_.normal());
+    sigma = std::min(std::max(sigma, 1e-15 * range), 0.5 * range);
+    child->mutability[k] = sigma;
+    child->genes[k] = space_.reflect(k, child->genes[k] + sigma * random_.normal());
+  }
+}
+
+Individual EvolutionStrategy::crossover() {
+  // Per bond type: one parent per site (particle at an extremity of a bond of that type), each
+  // chosen with a bias toward a good local cost at that site; the type's genes become the mean
+  // of the chosen parents' genes.
+  Individual child = population_[chooseParent({})];
+  for (int type : space_.typesWithGenes()) {
+    const std::vector<int>& genes = space_.genesOfType()[type];
+    const std::vector<int>& sites = space_.sitesOfType()[type];
+    std::vector<double> sum(genes.size(), 0.0), sum_mut(genes.size(), 0.0);
+    int parents = 0;
+    for (int site : sites) {
+      const Individual& parent = population_[chooseParent({site})];
+      for (size_t j = 0; j < genes.size(); ++j) {
+        sum[j] += parent.genes[genes[j]];
+        sum_mut[j] += parent.mutability[genes[j]];
+      }
+      ++parents;
+    }
+    if (parents == 0) continue;
+    for (size_t j = 0; j < genes.size(); ++j) {
+      child.genes[genes[j]] = sum[j] / parents;
+      child.mutability[genes[j]] = sum_mut[j] / parents;
+    }
+  }
+  return child;
+}
+
+Individual EvolutionStrategy::makeChild(Operator* op) {
+  const double shares[] = {options_.share_new, options_.share_partly_new, options_.share_replica,
+                           options_.share_partial_replica, options_.share_crossover};
+  const double total = std::accumulate(std::begin(shares), std::end(shares), 0.0);
+  double r = random_.uniform() * total;
+  int pick = 0;
+  while (pick < 4 && r >= shares[pick]) r -= shares[pick++];
+  const std::vector<int>& types = space_.typesWithGenes();
+  switch (pick) {
+    case 0: {
+      *op = Operator::kNew;
+      return makeRandom();
+    }
+    case 1: {  // partly new: one bond type's genes redrawn from the initial distribution
+      *op = Operator::kPartlyNew;
+      Individual child = population_[chooseParent({})];
+      const int type = types[random_.index(static_cast<int>(types.size()))];
+      for (int k : space_.genesOfType()[type]) {
+        child.genes[k] = space_.sampleInitial(k, random_);
+        const Gene& g = space_.gene(k);
+        child.mutability[k] = options_.initial_mutability * (g.upper - g.lower);
+      }
+      return child;
+    }
+    case 2: {  // replica of a globally good individual, every gene mutated
+      *op = Operator::kReplica;
+      Individual child = population_[chooseParent({})];
+      std::vector<int> all(space_.size());
+      std::iota(all.begin(), all.end(), 0);
+      mutateGenes(&child, all);
+      return child;
+    }
+    case 3: {  // partial replica: one bond type mutated, parent good at that type's sites
+      *op = Operator::kPartialReplica;
+      const int type = types[random_.index(static_cast<int>(types.size()))];
+      Individual child = population_[chooseParent(space_.sitesOfType()[type])];
+      mutateGenes(&child, space_.genesOfType()[type]);
+      return child;
+    }
+    default: {
+      *op = Operator::kCrossover;
+      return crossover();
+    }
+  }
+}
+
+void EvolutionStrategy::setInitialGuess(const std::vector<double>& genes, double spread_fraction) {
+  if (genes.size() != space_.size())
+    throw InputError("initial guess has " + std::to_string(genes.size()) + " values, expected " +
+                     std::to_string(space_.size()));
+  initial_guess_ = genes;
+  initial_guess_spread_ = spread_fraction;
+}
+
+void EvolutionStrategy::initialise() {
+  population_.clear();
+  for (int i = 0; i < options_.population; ++i) {
+    Individual ind = makeRandom();
+    if (!initial_guess_.empty()) {
+      for (size_t k = 0; k < space_.size(); ++k) {
+        const Gene& g = space_.gene(k);
+        const double sigma = initial_guess_spread_ * (g.upper - g.lower);
+        ind.genes[k] = space_.reflect(k, initial_guess_[k] + (i == 0 ? 0.0 : sigma * random_.normal()));
+        ind.mutability[k] = std::max(sigma, 1e-12 * (g.upper - g.lower));
+      }
+    }
+    population_.push_back(std::move(ind));
+  }
+  evaluate(&population_);
+  operator_counts_[static_cast<int>(Operator::kInitial)] += population_.size();
+}
+
+void EvolutionStrategy::select(std::vector<Individual>* children,
+                               const std::vector<Operator>& ops) {
+  // Elitist, biased random choice (the paper): the best share of parents + children is kept,
+  // the rest of the places go to binary-tournament winners among the others.
+  const size_t num_parents = population_.size();
+  std::vector<Individual> pool = std::move(population_);
+  std::vector<int> origin(pool.size(), -1);
+  for (size_t c = 0; c < children->size(); ++c) {
+    pool.push_back(std::move((*children)[c]));
+    origin.push_back(static_cast<int>(ops[c]));
+  }
+  std::vector<int> order(pool.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&pool](int a, int b) { return pool[a].cost < pool[b].cost; });
+  const size_t target = static_cast<size_t>(options_.population);
+  const size_t elite = std::min(target, std::max<size_t>(
+      1, static_cast<size_t>(std::ceil(options_.elite_fraction * target))));
+  std::vector<int> chosen(order.begin(), order.begin() + elite);
+  std::vector<int> rest(order.begin() + elite, order.end());
+  while (chosen.size() < target && !rest.empty()) {
+    const int a = random_.index(static_cast<int>(rest.size()));
+    const int b = random_.index(static_cast<int>(rest.size()));
+    const int w = pool[rest[a]].cost <= pool[rest[b]].cost ? a : b;
+    chosen.push_back(rest[w]);
+    rest[w] = rest.back();
+    rest.pop_back();
+  }
+  population_.clear();
+  for (int idx : chosen) {
+    if (origin[idx] >= 0) ++operator_successes_[origin[idx]];
+    population_.push_back(std::move(pool[idx]));
+  }
+  (void)num_parents;
+  best_index_ = 0;  // chosen[0] is the best of the pool
+}
+
+namespace {
+struct RefineContext {
+  const CostFunction* cost;
+  const ParameterSpace* space;
+  uint64_t calls = 0;
+};
+
+double refineObjective(const std::vector<double>& genes, std::vector<double>& /*grad*/,
+                       void* data) {
+  auto* ctx = static_cast<RefineContext*>(data);
+  ++ctx->calls;
+  const double c = ctx->cost->evaluate(ctx->space->toPhysical(genes), nullptr);
+  return std::isfinite(c) ? c : 1e300;
+}
+}  // namespace
+
+void EvolutionStrategy::refineBest() {
+  // A Powell-family derivative-free local search from the best individual (the paper's
+  // "variant of the Powell method"), inside the bounds; its result joins the population only
+  // when it improves the best.
+  const size_t n = space_.size();
+  nlopt::algorithm algo = nlopt::LN_BOBYQA;
+  if (options_.refine_algorithm == "newuoa") algo = nlopt::LN_NEWUOA_BOUND;
+  if (options_.refine_algorithm == "praxis") algo = nlopt::LN_PRAXIS;
+  nlopt::opt opt(algo, static_cast<unsigned>(n));
+  std::vector<double> lo(n), hi(n), step(n);
+  const Individual& start = best();
+  for (size_t k = 0; k < n; ++k) {
+    lo[k] = space_.gene(k).lower;
+    hi[k] = space_.gene(k).upper;
+    // Initial trust region from the self-adapted mutability: the ES already knows the scale.
+    step[k] = std::max(std::min(start.mutability[k] * 2.0, 0.25 * (hi[k] - lo[k])), 1e-9);
+  }
+  opt.set_lower_bounds(lo);
+  opt.set_upper_bounds(hi);
+  opt.set_initial_step(step);
+  RefineContext ctx{cost_.get(), &space_};
+  opt.set_min_objective(refineObjective, &ctx);
+  opt.set_maxeval(options_.refine_max_evaluations > 0 ? options_.refine_max_evaluations
+                                                      : static_cast<int>(30 * n + 100));
+  opt.set_ftol_rel(1e-15);
+  std::vector<double> x = start.genes;
+  double fx = start.cost;
+  try {
+    opt.optimize(x, fx);
+  } catch (const std::exception&) {
+    // NLopt signals roundoff-limited or forced stops by exceptions; x holds the best point.
+  }
+  evaluations_ += ctx.calls;
+  ++operator_counts_[static_cast<int>(Operator::kRefine)];
+  Individual refined = start;
+  refined.genes = x;
+  for (size_t k = 0; k < n; ++k) refined.genes[k] = std::min(std::max(x[k], lo[k]), hi[k]);
+  std::vector<Individual> one{refined};
+  evaluate(&one);
+  if (one[0].cost < start.cost) {
+    ++operator_successes_[static_cast<int>(Operator::kRefine)];
+    // Replace the worst individual so the population keeps the old best too.
+    auto worst = std::max_element(population_.begin(), population_.end(),
+                                  [](const Individual& a, const Individual& b) {
+                                    return a.cost < b.cost;
+                                  });
+    *worst = std::move(one[0]);
+    best_index_ = static_cast<int>(worst - population_.begin());
+  }
+}
+
+void EvolutionStrategy::step() {
+  if (!cost_) throw std::logic_error("EvolutionStrategy::step without a cost function");
+  if (population_.empty()) {
+    initialise();
+    std::vector<Individual> none;
+    select(&none, {});
+  }
+  std::vector<Individual> children;
+  std::vector<Operator> ops;
+  children.reserve(options_.offspring);
+  for (int c = 0; c < options_.offspring; ++c) {
+    Operator op;
+    children.push_back(makeChild(&op));
+    ops.push_back(op);
+    ++operator_counts_[static_cast<int>(op)];
+  }
+  evaluate(&children);
+  select(&children, ops);
+  ++generation_;
+  if (options_.refine_period > 0 && generation_ >= options_.refine_start_generation &&
+      (generation_ - options_.refine_start_generation) % options_.refine_period == 0)
+    refineBest();
+}
+
+}  // namespace mme

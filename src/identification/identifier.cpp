@@ -1,0 +1,113 @@
+#include "motion_model_estimation/identification/identifier.h"
+
+#include <Eigen/Dense>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include "motion_model_estimation/core/cost.h"
+#include "motion_model_estimation/core/error.h"
+
+namespace mme {
+
+std::string validateOptions(const IdentifyOptions& o) {
+  const std::string es = validateOptions(o.es);
+  if (!es.empty()) return es;
+  if (o.generations < 1) return "generations must be >= 1";
+  if (!(o.target_cost >= 0.0)) return "target_cost must be >= 0";
+  if (!(o.max_wall_time_s >= 0.0)) return "max_wall_time_s must be >= 0";
+  return "";
+}
+
+std::vector<double> estimateStdDevs(const CostFunction& cost, const ParameterSpace& space,
+                                    const std::vector<double>& genes) {
+  const size_t n = genes.size();
+  std::vector<double> out(n, std::numeric_limits<double>::quiet_NaN());
+  const double dof = 3.0 * static_cast<double>(cost.termCount()) - static_cast<double>(n);
+  if (n == 0 || dof <= 0) return out;
+  auto f = [&](const std::vector<double>& g) { return cost.evaluate(space.toPhysical(g), nullptr); };
+  const double f0 = f(genes);
+  std::vector<double> h(n);
+  for (size_t k = 0; k < n; ++k)
+    h[k] = 1e-4 * std::max(1.0, std::abs(genes[k])) * (space.gene(k).log_scale ? 0.1 : 1.0);
+  Eigen::MatrixXd hess(n, n);
+  std::vector<double> g = genes;
+  for (size_t i = 0; i < n; ++i) {
+    g[i] = genes[i] + h[i]; const double fp = f(g);
+    g[i] = genes[i] - h[i]; const double fm = f(g);
+    g[i] = genes[i];
+    hess(i, i) = (fp - 2.0 * f0 + fm) / (h[i] * h[i]);
+    for (size_t j = 0; j < i; ++j) {
+      double s = 0.0;
+      for (int a : {1, -1})
+        for (int b : {1, -1}) {
+          g[i] = genes[i] + a * h[i];
+          g[j] = genes[j] + b * h[j];
+          s += a * b * f(g);
+        }
+      g[i] = genes[i];
+      g[j] = genes[j];
+      hess(i, j) = hess(j, i) = s / (4.0 * h[i] * h[j]);
+    }
+  }
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(hess);
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return out;
+  const Eigen::MatrixXd inv = ldlt.solve(Eigen::MatrixXd::Identity(n, n));
+  const double s2 = std::max(f0, 0.0) / dof;
+  for (size_t k = 0; k < n; ++k) {
+    if (!(inv(k, k) >= 0.0)) continue;
+    const double gene_std = std::sqrt(2.0 * s2 * inv(k, k));
+    // Log genes: d(value) = value d(gene).
+    out[k] = space.gene(k).log_scale ? space.toPhysical(k, genes[k]) * gene_std : gene_std;
+  }
+  return out;
+}
+
+IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
+                             const IdentifyOptions& options,
+                             const std::function<void(const Progress&)>& progress) {
+  const std::string bad = validateOptions(options);
+  if (!bad.empty()) throw InputError(bad);
+  const auto start = std::chrono::steady_clock::now();
+  auto cost = std::make_shared<CostFunction>(model, trajectory);
+  if (cost->termCount() == 0)
+    throw InputError("no usable (particle, frame) terms: too few frames or everything occluded");
+  ParameterSpace space(model, trajectory);
+  EvolutionStrategy es(space, options.es);
+  es.setCostFunction(cost);
+  auto elapsed = [&start]() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  for (int g = 0; g < options.generations; ++g) {
+    es.step();
+    if (progress) {
+      Progress p;
+      p.generation = es.generation();
+      p.evaluations = es.evaluations();
+      p.best_cost = es.best().cost;
+      p.wall_time_s = elapsed();
+      p.best_values = es.bestValues();
+      progress(p);
+    }
+    if (options.target_cost > 0.0 && es.best().cost <= options.target_cost) break;
+    if (options.max_wall_time_s > 0.0 && elapsed() >= options.max_wall_time_s) break;
+  }
+  IdentifyResult r;
+  r.parameters = space.refs();
+  r.values = es.bestValues();
+  r.global_cost = es.best().cost;
+  r.generations = es.generation();
+  r.evaluations = es.evaluations();
+  r.frames = trajectory.numFrames();
+  r.std_devs = options.estimate_std
+                   ? estimateStdDevs(*cost, space, es.best().genes)
+                   : std::vector<double>(r.values.size(), std::numeric_limits<double>::quiet_NaN());
+  r.model = model;
+  setValues(r.model, r.parameters, r.values);
+  r.wall_time_s = elapsed();
+  return r;
+}
+
+}  // namespace mme

@@ -1,0 +1,292 @@
+#include "motion_model_estimation/identification/online_estimator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "motion_model_estimation/core/cost.h"
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/simulator.h"
+
+namespace mme {
+
+std::string validateOptions(const OnlineEstimatorOptions& o) {
+  if (o.window_frames < 3) return "window_frames must be >= 3";
+  if (o.min_frames < 3 || o.min_frames > o.window_frames)
+    return "min_frames must be in [3, window_frames]";
+  if (o.generations_per_update < 1) return "generations_per_update must be >= 1";
+  if (!(o.stability_rollout_factor >= 1.0)) return "stability_rollout_factor must be >= 1";
+  return validateOptions(o.es);
+}
+
+namespace {
+/// [s] a frame further than this (or 10 frame intervals) from the previous one starts a new
+/// window: see addFrame.
+constexpr double kClockJumpS = 1.0;
+
+void checkModel(const Model& model) {
+  const std::string bad = validateModel(model);
+  if (!bad.empty()) throw InputError("model: " + bad);
+  if (freeParameters(model).empty()) throw InputError("model: no free parameter to identify");
+}
+}  // namespace
+
+OnlineEstimator::OnlineEstimator(const Model& model, const OnlineEstimatorOptions& options)
+    : model_(model), options_(options) {
+  const std::string bad = validateOptions(options);
+  if (!bad.empty()) throw InputError(bad);
+  checkModel(model);
+  for (const Particle& p : model.particles) names_.push_back(p.name);
+}
+
+std::string OnlineEstimator::addFrame(double time_s, const std::vector<Eigen::Vector3d>& positions_m,
+                                      const std::vector<uint8_t>& occluded) {
+  std::lock_guard<std::mutex> lock(frames_mutex_);
+  if (positions_m.size() != names_.size() || (!occluded.empty() && occluded.size() != names_.size())) {
+    ++counters_.rejected_size;
+    return "expected " + std::to_string(names_.size()) + " positions, got " +
+           std::to_string(positions_m.size());
+  }
+  if (!std::isfinite(time_s)) {
+    ++counters_.rejected_time;
+    return "frame time is not finite";
+  }
+  if (!times_s_.empty()) {
+    // A jump of the clock (a bag played with --loop, a restarted capture) or a long pause: the
+    // window's frames do not continue into this one, so a new window starts with it (the
+    // population lives on). Smaller steps back are reordered or duplicated frames.
+    const double last_step =
+        times_s_.size() >= 2 ? times_s_.back() - times_s_[times_s_.size() - 2] : 0.0;
+    const double jump_s = std::max(kClockJumpS, 10.0 * last_step);
+    if (std::fabs(time_s - times_s_.back()) > jump_s) {
+      times_s_.clear();
+      positions_.clear();
+      occluded_.clear();
+    } else if (!(time_s > times_s_.back())) {
+      ++counters_.rejected_time;
+      return "frame time does not advance (reordered or duplicated frame)";
+    }
+  }
+  std::vector<uint8_t> mask(names_.size(), 0);
+  std::vector<Eigen::Vector3d> x = positions_m;
+  for (size_t i = 0; i < x.size(); ++i) {
+    if ((!occluded.empty() && occluded[i]) || !x[i].allFinite()) {
+      mask[i] = 1;
+      x[i].setZero();
+      ++counters_.occluded_samples;
+    }
+  }
+  times_s_.push_back(time_s);
+  positions_.push_back(std::move(x));
+  occluded_.push_back(std::move(mask));
+  while (static_cast<int>(times_s_.size()) > options_.window_frames) {
+    times_s_.pop_front();
+    positions_.pop_front();
+    occluded_.pop_front();
+  }
+  ++counters_.accepted;
+  return "";
+}
+
+Trajectory OnlineEstimator::snapshotLocked() const {
+  Trajectory t;
+  t.marker_names = names_;
+  const int frames = static_cast<int>(times_s_.size());
+  t.times_s.assign(times_s_.begin(), times_s_.end());
+  t.frame_numbers.resize(frames);
+  t.positions_m.reserve(frames * names_.size());
+  t.occluded.reserve(frames * names_.size());
+  for (int f = 0; f < frames; ++f) {
+    t.frame_numbers[f] = static_cast<uint32_t>(f);
+    t.positions_m.insert(t.positions_m.end(), positions_[f].begin(), positions_[f].end());
+    t.occluded.insert(t.occluded.end(), occluded_[f].begin(), occluded_[f].end());
+  }
+  // Rate from the median frame interval: robust to a dropped frame.
+  std::vector<double> dts;
+  for (int f = 1; f < frames; ++f) dts.push_back(t.times_s[f] - t.times_s[f - 1]);
+  if (!dts.empty()) {
+    std::nth_element(dts.begin(), dts.begin() + dts.size() / 2, dts.end());
+    t.frame_rate_hz = 1.0 / dts[dts.size() / 2];
+  }
+  return t;
+}
+
+Trajectory OnlineEstimator::window() const {
+  std::lock_guard<std::mutex> lock(frames_mutex_);
+  return snapshotLocked();
+}
+
+InputCounters OnlineEstimator::counters() const {
+  std::lock_guard<std::mutex> lock(frames_mutex_);
+  return counters_;
+}
+
+std::vector<std::string> OnlineEstimator::particleNames() const {
+  std::lock_guard<std::mutex> lock(frames_mutex_);
+  return names_;
+}
+
+double OnlineEstimator::frameRateHz() const {
+  std::lock_guard<std::mutex> lock(update_mutex_);
+  return model_.frame_rate_hz;
+}
+
+Trajectory OnlineEstimator::rollout(const Model& model, const Trajectory& window, int frames) {
+  Trajectory empty;
+  if (window.numFrames() < 2 || frames < 1) return empty;
+  for (int i = 0; i < window.numMarkers(); ++i)
+    if (window.isOccluded(0, i) || window.isOccluded(1, i)) return empty;
+  const double rate_hz = model.frame_rate_hz > 0 ? model.frame_rate_hz : window.frame_rate_hz;
+  if (!(rate_hz > 0)) return empty;
+  Model start = model;
+  for (int i = 0; i < window.numMarkers(); ++i) {
+    start.particles[i].position_m = window.position(1, i);
+    start.particles[i].velocity_mps = (window.position(1, i) - window.position(0, i)) * rate_hz;
+  }
+  return simulateTrajectory(start, frames, rate_hz);
+}
+
+bool OnlineEstimator::update() {
+  std::lock_guard<std::mutex> lock(update_mutex_);
+  Trajectory window_data;
+  {
+    std::lock_guard<std::mutex> frames_lock(frames_mutex_);
+    if (static_cast<int>(times_s_.size()) < options_.min_frames) return false;
+    window_data = snapshotLocked();
+  }
+  Model model = model_;
+  // Live streams carry their own clock: the model's rate wins only when it states one.
+  if (!(model.frame_rate_hz > 0.0)) model.frame_rate_hz = window_data.frame_rate_hz;
+  auto cost = std::make_shared<CostFunction>(model, window_data);
+  if (cost->termCount() == 0) return false;
+  if (!es_) {
+    es_ = std::make_unique<EvolutionStrategy>(ParameterSpace(model, window_data), options_.es);
+    if (options_.resume_from_model_values) {
+      std::vector<double> genes;
+      for (size_t k = 0; k < es_->space().size(); ++k) {
+        const ParamRef& ref = es_->space().gene(k).ref;
+        const Param& p = ref.bond_type >= 0 ? model.bond_types[ref.bond_type].params[ref.param]
+                                            : model.gravity_mps2[ref.param];
+        if (!p.has_value) break;
+        genes.push_back(es_->space().reflect(k, es_->space().toSearch(k, p.value)));
+      }
+      if (genes.size() == es_->space().size()) es_->setInitialGuess(genes, 1e-3);
+    }
+  }
+  es_->setCostFunction(cost);  // re-evaluates the living population on the new window
+  for (int g = 0; g < options_.generations_per_update; ++g) es_->step();
+
+  Estimate e;
+  e.valid = true;
+  e.generation = static_cast<uint32_t>(es_->generation());
+  e.evaluations = es_->evaluations();
+  e.global_cost = es_->best().cost;
+  e.window_frames = static_cast<uint32_t>(window_data.numFrames());
+  e.window_start_time_s = window_data.times_s.front();
+  e.window_end_time_s = window_data.times_s.back();
+  for (const Gene& g : es_->space().genes()) e.parameter_names.push_back(g.ref.name);
+  e.values = es_->bestValues();
+  e.local_costs = es_->best().local_costs;
+  // 1-sigma from the spread of the elite (best fifth) of the population: cheap enough to do
+  // at every update, unlike the Hessian used offline.
+  std::vector<const Individual*> sorted;
+  for (const Individual& ind : es_->population()) sorted.push_back(&ind);
+  std::sort(sorted.begin(), sorted.end(),
+            [](const Individual* a, const Individual* b) { return a->cost < b->cost; });
+  const size_t elite = std::max<size_t>(2, sorted.size() / 5);
+  e.std_devs.assign(e.values.size(), std::numeric_limits<double>::quiet_NaN());
+  if (sorted.size() >= 2) {
+    for (size_t k = 0; k < e.values.size(); ++k) {
+      double mean = 0, sq = 0;
+      for (size_t j = 0; j < elite && j < sorted.size(); ++j)
+        mean += es_->space().toPhysical(k, sorted[j]->genes[k]);
+      mean /= std::min(elite, sorted.size());
+      for (size_t j = 0; j < elite && j < sorted.size(); ++j) {
+        const double d = es_->space().toPhysical(k, sorted[j]->genes[k]) - mean;
+        sq += d * d;
+      }
+      e.std_devs[k] = std::sqrt(sq / (std::min(elite, sorted.size()) - 1));
+    }
+  }
+  // Stability: a long rollout of the best model from the window start stays bounded (finite
+  // and within 10x the window's extent around its centre).
+  Model best = model;
+  setValues(best, es_->space().refs(), e.values);
+  const int rollout_frames =
+      static_cast<int>(options_.stability_rollout_factor * window_data.numFrames());
+  const Trajectory long_run = rollout(best, window_data, rollout_frames);
+  if (!long_run.positions_m.empty()) {
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+    for (size_t k = 0; k < window_data.positions_m.size(); ++k)
+      if (!window_data.occluded[k]) {
+        lo = lo.cwiseMin(window_data.positions_m[k]);
+        hi = hi.cwiseMax(window_data.positions_m[k]);
+      }
+    const Eigen::Vector3d centre = 0.5 * (lo + hi);
+    const double limit_m = 10.0 * std::max((hi - lo).norm(), 1e-3);
+    e.stable = true;
+    for (const Eigen::Vector3d& x : long_run.positions_m)
+      if (!x.allFinite() || (x - centre).norm() > limit_m) {
+        e.stable = false;
+        break;
+      }
+  }
+  std::lock_guard<std::mutex> estimate_lock(estimate_mutex_);
+  estimate_ = std::move(e);
+  return true;
+}
+
+Estimate OnlineEstimator::estimate() const {
+  std::lock_guard<std::mutex> lock(estimate_mutex_);
+  return estimate_;
+}
+
+Model OnlineEstimator::currentModel() const {
+  Model model;
+  {
+    std::lock_guard<std::mutex> lock(update_mutex_);
+    model = model_;
+  }
+  const Estimate e = estimate();
+  if (e.valid) setValues(model, freeParameters(model), e.values);
+  return model;
+}
+
+void OnlineEstimator::reset(bool clear_window) {
+  {
+    std::lock_guard<std::mutex> lock(update_mutex_);
+    es_.reset();
+  }
+  {
+    std::lock_guard<std::mutex> lock(estimate_mutex_);
+    estimate_ = Estimate();
+  }
+  if (clear_window) {
+    std::lock_guard<std::mutex> lock(frames_mutex_);
+    times_s_.clear();
+    positions_.clear();
+    occluded_.clear();
+  }
+}
+
+void OnlineEstimator::replaceModel(const Model& model) {
+  checkModel(model);
+  std::vector<std::string> names;
+  for (const Particle& p : model.particles) names.push_back(p.name);
+  {
+    std::lock_guard<std::mutex> lock(update_mutex_);
+    std::lock_guard<std::mutex> frames_lock(frames_mutex_);
+    if (names != names_) {  // other markers: the window no longer fits
+      times_s_.clear();
+      positions_.clear();
+      occluded_.clear();
+      names_ = names;
+    }
+    model_ = model;
+    es_.reset();
+  }
+  std::lock_guard<std::mutex> lock(estimate_mutex_);
+  estimate_ = Estimate();
+}
+
+}  // namespace mme

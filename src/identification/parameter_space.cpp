@@ -1,0 +1,151 @@
+#include "motion_model_estimation/identification/parameter_space.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "motion_model_estimation/core/error.h"
+
+namespace mme {
+
+namespace {
+
+bool isLengthLike(int param) {
+  return param == kRestLength || param == kMinDistance || param == kMaxDistance;
+}
+
+bool isPositivePhysical(int param) { return param != kRestAngle; }
+
+/// Average observed length of the bonds of a spring type over all frames where both ends are
+/// seen; 0 when there is none.
+double averageObservedLength(const Model& model, const Trajectory& trajectory, int type) {
+  double sum = 0.0;
+  long count = 0;
+  for (const Bond& bond : model.bonds) {
+    if (bond.type != type || model.bond_types[type].kind != BondKind::kSpring) continue;
+    const int a = bond.particles[0], b = bond.particles[1];
+    for (int t = 0; t < trajectory.numFrames(); ++t) {
+      if (trajectory.isOccluded(t, a) || trajectory.isOccluded(t, b)) continue;
+      sum += (trajectory.position(t, b) - trajectory.position(t, a)).norm();
+      ++count;
+    }
+  }
+  return count > 0 ? sum / count : 0.0;
+}
+
+}  // namespace
+
+ParameterSpace::ParameterSpace(const Model& model, const Trajectory& trajectory) {
+  const int num_types = static_cast<int>(model.bond_types.size());
+  genes_of_type_.assign(num_types + 1, {});  // last slot: gravity
+  sites_of_type_.assign(num_types + 1, {});
+
+  for (const ParamRef& ref : freeParameters(model)) {
+    const Param& p = ref.bond_type >= 0 ? model.bond_types[ref.bond_type].params[ref.param]
+                                        : model.gravity_mps2[ref.param];
+    Gene g;
+    g.ref = ref;
+    g.has_initial = p.has_value;
+    const bool is_gravity = ref.bond_type < 0;
+    g.log_scale = !is_gravity && isPositivePhysical(ref.param) && !(p.has_min && p.min <= 0.0);
+    // Physical bounds: the model's when given, else defaults scaled by what is known.
+    double lo, hi;
+    const double observed =
+        (!is_gravity && isLengthLike(ref.param))
+            ? averageObservedLength(model, trajectory, ref.bond_type) : 0.0;
+    if (is_gravity) {
+      lo = -30.0; hi = 30.0;
+    } else if (ref.param == kRestAngle) {
+      lo = 0.0; hi = M_PI;
+    } else if (ref.param == kMaxElongation) {
+      lo = 1e-3; hi = 10.0;
+    } else if (isLengthLike(ref.param)) {
+      const double scale = observed > 0.0 ? observed : (p.has_value && p.value > 0 ? p.value : 1.0);
+      lo = scale / 3.0; hi = scale * 3.0;
+    } else {
+      lo = 1e-4; hi = 1e4;
+    }
+    if (p.has_min) lo = p.min;
+    if (p.has_max) hi = p.max;
+    if (g.log_scale) {
+      lo = std::max(lo, 1e-12);
+      if (!(hi > lo)) hi = lo * 10.0;
+    }
+    if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi))
+      throw InputError("parameter '" + ref.name + "': empty or infinite search bounds");
+    g.lower = g.log_scale ? std::log(lo) : lo;
+    g.upper = g.log_scale ? std::log(hi) : hi;
+    // Initial distribution (the paper): lengths around the average observed distance, others
+    // log-Gaussian; an initial guess in the model file centres it.
+    const double range = g.upper - g.lower;
+    if (ref.param == kRestLength && observed > 0.0 && !p.has_value) {
+      g.init_center = g.log_scale ? std::log(observed) : observed;
+      g.init_spread = g.log_scale ? 0.1 : 0.1 * observed;
+    } else if (p.has_value && (!g.log_scale || p.value > 0.0)) {
+      g.init_center = g.log_scale ? std::log(p.value) : p.value;
+      g.init_spread = range / 6.0;
+    } else {
+      g.init_center = 0.5 * (g.lower + g.upper);
+      g.init_spread = range / 6.0;
+    }
+    g.init_center = std::min(std::max(g.init_center, g.lower), g.upper);
+    const int slot = is_gravity ? num_types : ref.bond_type;
+    genes_of_type_[slot].push_back(static_cast<int>(genes_.size()));
+    genes_.push_back(g);
+  }
+
+  // Sites of each type.
+  std::vector<std::set<int>> sites(num_types + 1);
+  for (const Bond& bond : model.bonds) {
+    const int arity = kindArity(model.bond_types[bond.type].kind);
+    for (int k = 0; k < arity; ++k) sites[bond.type].insert(bond.particles[k]);
+  }
+  for (const Interaction& in : model.interactions)
+    for (size_t i = 0; i < model.particles.size(); ++i)
+      if (model.particles[i].group == in.group_a || model.particles[i].group == in.group_b)
+        sites[in.type].insert(static_cast<int>(i));
+  for (size_t i = 0; i < model.particles.size(); ++i)
+    if (!model.particles[i].fixed) sites[num_types].insert(static_cast<int>(i));
+  for (int t = 0; t <= num_types; ++t) {
+    sites_of_type_[t].assign(sites[t].begin(), sites[t].end());
+    if (!genes_of_type_[t].empty()) types_with_genes_.push_back(t);
+  }
+}
+
+std::vector<ParamRef> ParameterSpace::refs() const {
+  std::vector<ParamRef> out;
+  for (const Gene& g : genes_) out.push_back(g.ref);
+  return out;
+}
+
+double ParameterSpace::toPhysical(size_t k, double gene_value) const {
+  return genes_[k].log_scale ? std::exp(gene_value) : gene_value;
+}
+
+double ParameterSpace::toSearch(size_t k, double physical_value) const {
+  if (k >= genes_.size()) return physical_value;
+  return genes_[k].log_scale ? std::log(physical_value) : physical_value;
+}
+
+std::vector<double> ParameterSpace::toPhysical(const std::vector<double>& genes) const {
+  std::vector<double> out(genes.size());
+  for (size_t k = 0; k < genes.size(); ++k) out[k] = toPhysical(k, genes[k]);
+  return out;
+}
+
+double ParameterSpace::reflect(size_t k, double v) const {
+  const double lo = genes_[k].lower, hi = genes_[k].upper, w = hi - lo;
+  if (!std::isfinite(v)) return 0.5 * (lo + hi);
+  if (v >= lo && v <= hi) return v;
+  // Fold into [lo, hi] (mirror at the bounds, repeatedly for far jumps).
+  double r = std::fmod(v - lo, 2.0 * w);
+  if (r < 0) r += 2.0 * w;
+  return r <= w ? lo + r : hi - (r - w);
+}
+
+double ParameterSpace::sampleInitial(size_t k, Random& random) const {
+  const Gene& g = genes_[k];
+  return reflect(k, g.init_center + g.init_spread * random.normal());
+}
+
+}  // namespace mme

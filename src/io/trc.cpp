@@ -1,0 +1,289 @@
+// OpenSim TRC marker files: tab-separated text, three header lines of metadata, a marker-name
+// line, a coordinate-label line and one row per frame ("frame<TAB>time<TAB>x<TAB>y<TAB>z...").
+//
+// Reading is lenient about the layout variations real files show (CRLF line ends, trailing
+// tabs, padded or doubled tabs in the metadata values line, an optional blank line before the
+// data, short rows) but strict about content: a field that is present must be a number, so a
+// corrupt file is reported with its line instead of silently becoming gaps.
+
+#include "motion_model_estimation/io/trc.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/io/model_yaml.h"  // writeFileAtomically
+
+namespace mme {
+namespace {
+
+std::string trim(const std::string& s) {
+  const char* ws = " \t\r\n\f\v";
+  const size_t b = s.find_first_not_of(ws);
+  if (b == std::string::npos) return "";
+  const size_t e = s.find_last_not_of(ws);
+  return s.substr(b, e - b + 1);
+}
+
+std::vector<std::string> splitTabs(const std::string& line) {
+  std::vector<std::string> fields;
+  size_t start = 0;
+  while (true) {
+    const size_t tab = line.find('\t', start);
+    fields.push_back(trim(line.substr(start, tab == std::string::npos ? std::string::npos
+                                                                       : tab - start)));
+    if (tab == std::string::npos) break;
+    start = tab + 1;
+  }
+  return fields;
+}
+
+[[noreturn]] void fail(const std::string& path, int line, const std::string& reason) {
+  std::ostringstream msg;
+  msg << path;
+  if (line > 0) msg << ':' << line;
+  msg << ": " << reason;
+  throw InputError(msg.str());
+}
+
+/// Parses a whole field as a double. std::from_chars is locale-independent (a ROS node or a
+/// GUI may have set a locale with a decimal comma) and rejects trailing garbage.
+bool parseDouble(const std::string& field, double* value) {
+  if (field.empty()) return false;
+  const char* begin = field.data();
+  const char* end = begin + field.size();
+  if (*begin == '+') ++begin;  // from_chars does not accept a leading '+'
+  const auto result = std::from_chars(begin, end, *value);
+  return result.ec == std::errc() && result.ptr == end;
+}
+
+/// Units per metre (0 when unknown). Kept as exact integers so that converting divides by 1000
+/// instead of multiplying by the inexact 1e-3: a millimetre file round-trips more exactly.
+double unitsPerMetre(const std::string& units) {
+  std::string u = units;
+  std::transform(u.begin(), u.end(), u.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (u == "mm") return 1000.0;
+  if (u == "cm") return 100.0;
+  if (u == "m") return 1.0;
+  return 0.0;
+}
+
+/// Reads lines, dropping a trailing '\r' so CRLF files parse like LF files.
+class LineReader {
+ public:
+  explicit LineReader(std::istream& in) : in_(in) {}
+  bool next(std::string* line) {
+    if (!std::getline(in_, *line)) return false;
+    ++number_;
+    if (!line->empty() && line->back() == '\r') line->pop_back();
+    return true;
+  }
+  int number() const { return number_; }
+
+ private:
+  std::istream& in_;
+  int number_ = 0;
+};
+
+std::string formatDouble(double v) {
+  // Shortest representation that parses back to the same double: exact round trips without
+  // the noise digits of %.17g.
+  char buf[64];
+  const auto result = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, result.ptr);
+}
+
+}  // namespace
+
+Trajectory readTrc(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, 0, std::string("cannot open: ") + std::strerror(errno));
+  LineReader reader(in);
+  std::string line;
+
+  // Line 1: "PathFileType 4 (X/Y/Z) name" (some writers use spaces instead of tabs).
+  if (!reader.next(&line)) fail(path, 0, "empty file (expected a TRC header)");
+  if (trim(line).rfind("PathFileType", 0) != 0)
+    fail(path, reader.number(), "not a TRC file (expected a line starting with 'PathFileType')");
+
+  // Lines 2 and 3: metadata keys and values.
+  if (!reader.next(&line)) fail(path, reader.number(), "missing metadata keys line");
+  std::vector<std::string> keys = splitTabs(line);
+  keys.erase(std::remove(keys.begin(), keys.end(), std::string()), keys.end());
+  if (!reader.next(&line)) fail(path, reader.number(), "missing metadata values line");
+  const int values_line = reader.number();
+  std::vector<std::string> values = splitTabs(line);
+  // Some writers pad the values line with doubled tabs ("100.0\t\t100.0\t\t..."); when the
+  // positional pairing cannot be right, pair keys with the non-empty values instead.
+  while (!values.empty() && values.back().empty()) values.pop_back();
+  if (values.size() != keys.size()) {
+    values.erase(std::remove(values.begin(), values.end(), std::string()), values.end());
+  }
+  if (values.size() < keys.size())
+    fail(path, values_line,
+         "metadata has " + std::to_string(keys.size()) + " keys but " +
+             std::to_string(values.size()) + " values");
+  std::map<std::string, std::string> meta;
+  for (size_t k = 0; k < keys.size(); ++k) meta[keys[k]] = values[k];
+
+  Trajectory trajectory;
+  auto rate_it = meta.find("DataRate");
+  if (rate_it == meta.end()) fail(path, values_line, "missing DataRate");
+  if (!parseDouble(rate_it->second, &trajectory.frame_rate_hz) ||
+      !std::isfinite(trajectory.frame_rate_hz) || trajectory.frame_rate_hz <= 0.0)
+    fail(path, values_line, "DataRate '" + rate_it->second + "' is not a positive number");
+  // OpenSim always writes Units; a file without it follows the TRC convention of millimetres.
+  const std::string units = meta.count("Units") ? meta["Units"] : std::string("mm");
+  const double per_metre = unitsPerMetre(units);
+  if (per_metre == 0.0)
+    fail(path, values_line, "unsupported Units '" + units + "' (expected mm, cm or m)");
+
+  // Line 4: "Frame#<TAB>Time<TAB>name1<TAB><TAB><TAB>name2...": names are the non-empty fields
+  // after Time, which also accepts writers that omit the padding tabs.
+  if (!reader.next(&line)) fail(path, reader.number(), "missing marker names line");
+  const int names_line = reader.number();
+  {
+    const std::vector<std::string> fields = splitTabs(line);
+    for (size_t k = 2; k < fields.size(); ++k)
+      if (!fields[k].empty()) trajectory.marker_names.push_back(fields[k]);
+  }
+  if (trajectory.marker_names.empty()) fail(path, names_line, "no marker names");
+  // A NumMarkers value that disagrees with the names is tolerated: the names line is what the
+  // data columns follow, so it takes precedence (some exporters leave NumMarkers stale).
+
+  // Line 5: "X1 Y1 Z1 ..." coordinate labels; only its presence matters.
+  if (!reader.next(&line)) fail(path, reader.number(), "missing coordinate labels line");
+
+  const size_t n = trajectory.marker_names.size();
+  while (reader.next(&line)) {
+    if (trim(line).empty()) continue;  // the optional blank line, or blank lines at the end
+    const int ln = reader.number();
+    std::vector<std::string> fields = splitTabs(line);
+    while (!fields.empty() && fields.back().empty()) fields.pop_back();  // trailing tabs
+    if (fields.size() > 2 + 3 * n)
+      fail(path, ln,
+           "row has " + std::to_string(fields.size() - 2) + " coordinate fields but only " +
+               std::to_string(n) + " markers are named");
+
+    double frame = 0.0;
+    if (!parseDouble(fields[0], &frame) || frame < 0.0 || frame != std::floor(frame) ||
+        frame > std::numeric_limits<uint32_t>::max())
+      fail(path, ln, "Frame# '" + fields[0] + "' is not a non-negative integer");
+    double time = 0.0;
+    if (fields.size() > 1 && !fields[1].empty()) {
+      if (!parseDouble(fields[1], &time) || !std::isfinite(time))
+        fail(path, ln, "Time '" + fields[1] + "' is not a number");
+    } else {
+      // No time column in this row: continue the sequence at the file's rate.
+      time = trajectory.times_s.empty()
+                 ? 0.0
+                 : trajectory.times_s.back() + 1.0 / trajectory.frame_rate_hz;
+      if (!std::isfinite(time))  // e.g. DataRate 1e-307: the sequence overflows
+        fail(path, ln, "no Time and the time continued at DataRate is not finite");
+    }
+    trajectory.frame_numbers.push_back(static_cast<uint32_t>(frame));
+    trajectory.times_s.push_back(time);
+
+    for (size_t i = 0; i < n; ++i) {
+      Eigen::Vector3d p = Eigen::Vector3d::Zero();
+      bool occluded = false;
+      for (int c = 0; c < 3; ++c) {
+        const size_t k = 2 + 3 * i + c;
+        if (k >= fields.size() || fields[k].empty()) {
+          occluded = true;  // missing or empty field: a gap
+          continue;
+        }
+        double v = 0.0;
+        if (!parseDouble(fields[k], &v))
+          fail(path, ln,
+               "marker '" + trajectory.marker_names[i] + "': '" + fields[k] +
+                   "' is not a number");
+        if (std::isnan(v)) {
+          occluded = true;  // OpenSim 4 writes NaN for missing markers
+          continue;
+        }
+        if (!std::isfinite(v))
+          fail(path, ln, "marker '" + trajectory.marker_names[i] + "': infinite coordinate");
+        p[c] = v / per_metre;
+      }
+      // Many capture systems export gaps as exactly 0,0,0.
+      if (!occluded && p.isZero(0.0)) occluded = true;
+      if (occluded) p.setZero();
+      trajectory.positions_m.push_back(p);
+      trajectory.occluded.push_back(occluded ? 1 : 0);
+    }
+  }
+  if (in.bad()) fail(path, reader.number(), "read error");
+  if (trajectory.times_s.empty()) fail(path, reader.number(), "no data rows");
+  // NumFrames is not checked against the rows: the rows are the data, and truncated or
+  // hand-edited files commonly keep a stale NumFrames.
+  return trajectory;
+}
+
+void writeTrc(const std::string& path, const Trajectory& trajectory, const std::string& units) {
+  const double per_metre = unitsPerMetre(units);
+  if (per_metre == 0.0)
+    throw InputError(path + ": unsupported TRC units '" + units + "' (expected mm, cm or m)");
+  const std::string problem = trajectory.validate();
+  if (!problem.empty()) throw InputError(path + ": cannot write trajectory: " + problem);
+  if (trajectory.marker_names.empty()) throw InputError(path + ": cannot write TRC: no markers");
+  for (const std::string& name : trajectory.marker_names)
+    if (name.empty() || name != trim(name) || name.find_first_of("\t\r\n") != std::string::npos)
+      throw InputError(path + ": marker name '" + name +
+                       "' cannot be written to TRC (empty, or contains tabs, line breaks or "
+                       "surrounding spaces)");
+
+  const int frames = trajectory.numFrames();
+  const int n = trajectory.numMarkers();
+  const std::string rate = formatDouble(trajectory.frame_rate_hz);
+  const std::string first_frame =
+      frames > 0 ? std::to_string(trajectory.frame_numbers[0]) : std::string("1");
+  std::string base = path;
+  const size_t slash = base.find_last_of('/');
+  if (slash != std::string::npos) base = base.substr(slash + 1);
+
+  std::string out;
+  out.reserve(static_cast<size_t>(frames) * (32 + n * 48) + 512);
+  out += "PathFileType\t4\t(X/Y/Z)\t" + base + "\n";
+  out += "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame"
+         "\tOrigNumFrames\n";
+  out += rate + "\t" + rate + "\t" + std::to_string(frames) + "\t" + std::to_string(n) + "\t" +
+         units + "\t" + rate + "\t" + first_frame + "\t" + std::to_string(frames) + "\n";
+  out += "Frame#\tTime";
+  for (const std::string& name : trajectory.marker_names) out += "\t" + name + "\t\t";
+  out += "\n\t";
+  for (int i = 1; i <= n; ++i) {
+    const std::string k = std::to_string(i);
+    out += "\tX" + k + "\tY" + k + "\tZ" + k;
+  }
+  out += "\n\n";
+  for (int t = 0; t < frames; ++t) {
+    out += std::to_string(trajectory.frame_numbers[t]);
+    out += '\t';
+    out += formatDouble(trajectory.times_s[t]);
+    for (int i = 0; i < n; ++i) {
+      if (trajectory.isOccluded(t, i)) {
+        out += "\t\t\t";
+        continue;
+      }
+      // A visible sample at exactly (0,0,0) reads back as a gap: that is the TRC convention.
+      const Eigen::Vector3d& p = trajectory.position(t, i);
+      for (int c = 0; c < 3; ++c) {
+        out += '\t';
+        out += formatDouble(p[c] * per_metre);
+      }
+    }
+    out += '\n';
+  }
+  writeFileAtomically(path, out);
+}
+
+}  // namespace mme

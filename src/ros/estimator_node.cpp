@@ -1,0 +1,543 @@
+#include "motion_model_estimation/ros/estimator_node.h"
+
+#include <geometry_msgs/TransformStamped.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+#include <std_msgs/String.h>
+
+#include <sys/stat.h>
+
+#include <Eigen/Geometry>
+#include <cerrno>
+#include <cstdlib>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "motion_model_estimation/ModelEstimate.h"
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/io/model_yaml.h"
+#include "motion_model_estimation/io/path_confinement.h"
+#include "motion_model_estimation/ros/bag_io.h"
+#include "motion_model_estimation/ros/marker_builder.h"
+#include "motion_model_estimation/ros/names.h"
+#include "motion_model_estimation/ros/param_utils.h"
+#include "motion_model_estimation/ros/vicon_markers.h"
+
+namespace mme {
+
+namespace {
+
+template <typename T>
+void read(const ros::NodeHandle& pnh, const std::string& name, T* value) {
+  std::string error;
+  if (!readParam(pnh, name, value, &error)) throw InputError(error);
+}
+
+void require(bool ok, const std::string& message) {
+  if (!ok) throw InputError(message);
+}
+
+}  // namespace
+
+EstimatorNodeOptions readEstimatorOptions(const ros::NodeHandle& pnh) {
+  EstimatorNodeOptions o;
+  read(pnh, "model", &o.model_path);
+  require(!o.model_path.empty(), "~model is required (path to a model file)");
+  read(pnh, "input_type", &o.input_type);
+  require(o.input_type == "markers" || o.input_type == "pointcloud" || o.input_type == "vicon",
+          "~input_type must be markers, pointcloud or vicon, got '" + o.input_type + "'");
+  read(pnh, "bag", &o.bag);
+  read(pnh, "bag_topic", &o.bag_topic);
+  read(pnh, "bag_rate", &o.bag_rate);
+  require(o.bag_rate >= 0.0 && std::isfinite(o.bag_rate), "~bag_rate must be >= 0");
+  read(pnh, "fixed_frame", &o.fixed_frame);
+  read(pnh, "update_rate_hz", &o.update_rate_hz);
+  require(o.update_rate_hz > 0.0 && o.update_rate_hz <= 1000.0,
+          "~update_rate_hz must be in (0, 1000]");
+  read(pnh, "publish_markers", &o.publish_markers);
+  read(pnh, "color_bonds_by", &o.color_bonds_by);
+  require(o.color_bonds_by == "strain" || o.color_bonds_by == "local_cost",
+          "~color_bonds_by must be strain or local_cost");
+  read(pnh, "particle_diameter_m", &o.particle_diameter_m);
+  require(o.particle_diameter_m > 0.0, "~particle_diameter_m must be > 0");
+  read(pnh, "tf_timeout_sec", &o.tf_timeout_sec);
+  require(o.tf_timeout_sec >= 0.0, "~tf_timeout_sec must be >= 0");
+  read(pnh, "vicon_qualify_with_subject", &o.vicon_qualify_with_subject);
+  read(pnh, "model_dir", &o.model_dir);
+  if (o.model_dir.empty()) {
+    const char* ros_home = std::getenv("ROS_HOME");
+    const char* home = std::getenv("HOME");
+    o.model_dir = ros_home ? ros_home : std::string(home ? home : "/tmp") + "/.ros";
+  }
+  read(pnh, "autosave_path", &o.autosave_path);
+  read(pnh, "autosave_period_sec", &o.autosave_period_sec);
+  require(o.autosave_period_sec > 0.0 && std::isfinite(o.autosave_period_sec),
+          "~autosave_period_sec must be > 0");
+  read(pnh, "initial_model", &o.initial_model);
+  OnlineEstimatorOptions& e = o.estimator;
+  read(pnh, "window_frames", &e.window_frames);
+  require(e.window_frames >= 3, "~window_frames must be >= 3");
+  e.min_frames = std::min(e.min_frames, e.window_frames);
+  read(pnh, "min_frames", &e.min_frames);
+  require(e.min_frames >= 3 && e.min_frames <= e.window_frames,
+          "~min_frames must be in [3, ~window_frames]");
+  read(pnh, "generations_per_update", &e.generations_per_update);
+  require(e.generations_per_update >= 1, "~generations_per_update must be >= 1");
+  read(pnh, "population", &e.es.population);
+  require(e.es.population >= 2, "~population must be >= 2");
+  e.es.offspring = e.es.population;
+  int seed = static_cast<int>(e.es.seed);
+  read(pnh, "seed", &seed);
+  require(seed >= 0, "~seed must be >= 0");
+  e.es.seed = static_cast<uint64_t>(seed);
+  read(pnh, "threads", &e.es.threads);
+  require(e.es.threads >= 1 && e.es.threads <= 256, "~threads must be in [1, 256]");
+  read(pnh, "refine_start_generation", &e.es.refine_start_generation);
+  read(pnh, "refine_period", &e.es.refine_period);
+  require(e.es.refine_start_generation >= 0 && e.es.refine_period >= 0,
+          "~refine_start_generation and ~refine_period must be >= 0");
+  const std::string bad = validateOptions(e);
+  require(bad.empty(), bad);
+  return o;
+}
+
+EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
+                             const EstimatorNodeOptions& options)
+    : nh_(nh), pnh_(pnh), options_(options), tf_listener_(tf_buffer_) {
+  Model model = loadModelFile(options_.model_path);
+  OnlineEstimatorOptions estimator_options = options_.estimator;
+  if (!options_.initial_model.empty()) {
+    struct stat st;
+    if (::stat(options_.initial_model.c_str(), &st) == 0) {
+      // A saved model (e.g. the autosave of a previous run): same structure, values to resume.
+      model = loadModelFile(options_.initial_model);
+      estimator_options.resume_from_model_values = true;
+      ROS_INFO("estimator_node: resuming from %s", options_.initial_model.c_str());
+    } else {
+      ROS_INFO("estimator_node: ~initial_model %s does not exist yet; starting from ~model",
+               options_.initial_model.c_str());
+    }
+  }
+  if (::mkdir(options_.model_dir.c_str(), 0755) != 0 && errno != EEXIST)
+    throw InputError("~model_dir '" + options_.model_dir + "' cannot be created");
+  if (!options_.autosave_path.empty()) {
+    std::string error;
+    autosave_target_ = confinePath(options_.model_dir, options_.autosave_path, true, &error);
+    if (autosave_target_.empty()) throw InputError("~autosave_path: " + error);
+  }
+  estimator_ = std::make_unique<OnlineEstimator>(model, estimator_options);
+  fixed_frame_ = options_.fixed_frame.empty() ? model.frame_id : options_.fixed_frame;
+  estimate_pub_ = pnh_.advertise<motion_model_estimation::ModelEstimate>(names::kEstimate, 10);
+  markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>(names::kVisualization, 2);
+  stats_pub_ = pnh_.advertise<std_msgs::String>("stats", 1, true);  // latched, 1 Hz
+  reset_srv_ = pnh_.advertiseService(names::kReset, &EstimatorNode::onReset, this);
+  export_srv_ = pnh_.advertiseService(names::kExportModel, &EstimatorNode::onExport, this);
+  load_srv_ = pnh_.advertiseService(names::kLoadModel, &EstimatorNode::onLoad, this);
+  if (options_.bag.empty()) {
+    if (options_.input_type == "markers")
+      input_sub_ = nh_.subscribe(names::kMarkersIn, 200, &EstimatorNode::onMarkerFrame, this);
+    else if (options_.input_type == "pointcloud")
+      input_sub_ = nh_.subscribe(names::kMarkersIn, 200, &EstimatorNode::onPointCloud, this);
+    else
+      input_sub_ = nh_.subscribe(names::kMarkersIn, 200, &EstimatorNode::onVicon, this);
+  }
+  publish_timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / options_.update_rate_hz),
+                                       &EstimatorNode::onPublishTimer, this);
+  if (!autosave_target_.empty())
+    autosave_timer_ = nh_.createWallTimer(ros::WallDuration(options_.autosave_period_sec),
+                                          &EstimatorNode::onAutosaveTimer, this);
+  stats_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), &EstimatorNode::onStatsTimer, this);
+  ROS_INFO("estimator_node: %zu particles, %zu free parameters, window %d frames, population %d, "
+           "input %s%s", model.particles.size(), freeParameters(model).size(),
+           options_.estimator.window_frames, options_.estimator.es.population,
+           options_.bag.empty() ? options_.input_type.c_str() : "bag ",
+           options_.bag.c_str());
+}
+
+EstimatorNode::~EstimatorNode() {
+  stop_ = true;
+  if (worker_.joinable()) worker_.join();
+  if (bag_thread_.joinable()) bag_thread_.join();
+}
+
+void EstimatorNode::reject(const std::string& why) {
+  ++rejected_;
+  ROS_WARN_THROTTLE(2.0, "estimator_node: frame skipped: %s (%llu skipped so far)", why.c_str(),
+                    static_cast<unsigned long long>(rejected_.load()));
+}
+
+void EstimatorNode::onMarkerFrame(const motion_model_estimation::MarkerFrame::ConstPtr& msg) {
+  if (msg->names.size() != msg->positions.size() ||
+      (!msg->occluded.empty() && msg->occluded.size() != msg->positions.size())) {
+    reject("names, positions and occluded differ in length");
+    return;
+  }
+  std::vector<Eigen::Vector3d> x(msg->positions.size());
+  std::vector<uint8_t> occluded(msg->positions.size(), 0);
+  for (size_t i = 0; i < x.size(); ++i) {
+    x[i] = Eigen::Vector3d(msg->positions[i].x, msg->positions[i].y, msg->positions[i].z);
+    occluded[i] = !msg->occluded.empty() && msg->occluded[i];
+  }
+  addObservation(msg->header.stamp, msg->header.frame_id, msg->names, std::move(x),
+                 std::move(occluded));
+}
+
+void EstimatorNode::onPointCloud(const sensor_msgs::PointCloud2::ConstPtr& msg) {
+  const size_t n = static_cast<size_t>(msg->width) * msg->height;
+  bool has_xyz = false;
+  for (const auto& f : msg->fields) has_xyz = has_xyz || f.name == "x";
+  if (!has_xyz || msg->point_step == 0 || msg->data.size() < n * msg->point_step) {
+    reject("PointCloud2 without x/y/z fields or with truncated data");
+    return;
+  }
+  std::vector<Eigen::Vector3d> x;
+  std::vector<uint8_t> occluded;
+  try {
+    sensor_msgs::PointCloud2ConstIterator<float> it(*msg, "x");
+    for (size_t i = 0; i < n; ++i, ++it) {
+      x.emplace_back(it[0], it[1], it[2]);
+      occluded.push_back(!x.back().allFinite());
+    }
+  } catch (const std::exception& e) {
+    reject(std::string("PointCloud2: ") + e.what());
+    return;
+  }
+  addObservation(msg->header.stamp, msg->header.frame_id, {}, std::move(x), std::move(occluded));
+}
+
+void EstimatorNode::onVicon(const topic_tools::ShapeShifter::ConstPtr& msg) {
+  if (msg->getDataType() != names::kViconMarkersType) {
+    reject("expected vicon_bridge/Markers, got " + msg->getDataType());
+    return;
+  }
+  std::vector<uint8_t> bytes(msg->size());
+  ros::serialization::OStream stream(bytes.data(), static_cast<uint32_t>(bytes.size()));
+  msg->write(stream);
+  ViconMarkers m;
+  std::string error;
+  if (!decodeViconMarkers(bytes.data(), bytes.size(), options_.vicon_qualify_with_subject, &m,
+                          &error)) {
+    reject(error);
+    return;
+  }
+  ros::Time stamp;
+  stamp.fromSec(m.stamp_s);
+  addObservation(stamp, m.frame_id, m.names, std::move(m.positions_m), std::move(m.occluded));
+}
+
+void EstimatorNode::addObservation(const ros::Time& stamp, const std::string& frame_id,
+                                   const std::vector<std::string>& names,
+                                   std::vector<Eigen::Vector3d> positions_m,
+                                   std::vector<uint8_t> occluded) {
+  // Bring the points into the fixed frame.
+  if (!frame_id.empty() && frame_id != fixed_frame_) {
+    geometry_msgs::TransformStamped tf;
+    try {
+      tf = tf_buffer_.lookupTransform(fixed_frame_, frame_id, stamp,
+                                      ros::Duration(options_.tf_timeout_sec));
+    } catch (const std::exception& e) {
+      reject("no transform " + frame_id + " -> " + fixed_frame_ + ": " + e.what());
+      return;
+    }
+    const auto& q = tf.transform.rotation;
+    const auto& t = tf.transform.translation;
+    const Eigen::Isometry3d pose =
+        Eigen::Translation3d(t.x, t.y, t.z) * Eigen::Quaterniond(q.w, q.x, q.y, q.z);
+    for (Eigen::Vector3d& x : positions_m) x = pose * x;
+  }
+  // Map input order to the model's particle order.
+  std::vector<Eigen::Vector3d> x;
+  std::vector<uint8_t> mask;
+  if (names.empty()) {
+    x = std::move(positions_m);
+    mask = std::move(occluded);
+  } else {
+    std::lock_guard<std::mutex> lock(names_mutex_);
+    const std::vector<std::string> particles = estimator_->particleNames();
+    if (names != cached_names_) {
+      cached_names_ = names;
+      cached_index_.assign(names.size(), -1);
+      std::unordered_map<std::string, int> index;
+      for (size_t i = 0; i < particles.size(); ++i) index[particles[i]] = static_cast<int>(i);
+      size_t unknown = 0;
+      for (size_t k = 0; k < names.size(); ++k) {
+        auto it = index.find(names[k]);
+        if (it != index.end()) cached_index_[k] = it->second; else ++unknown;
+      }
+      if (unknown > 0)
+        ROS_WARN("estimator_node: %zu marker names in the input are not model particles "
+                 "(ignored), e.g. '%s'", unknown,
+                 names[std::find(cached_index_.begin(), cached_index_.end(), -1) -
+                       cached_index_.begin()].c_str());
+    }
+    x.assign(particles.size(), Eigen::Vector3d::Zero());
+    mask.assign(particles.size(), 1);  // particles absent from the frame are occluded
+    size_t matched = 0;
+    for (size_t k = 0; k < names.size(); ++k) {
+      const int i = cached_index_[k];
+      if (i < 0) continue;
+      x[i] = positions_m[k];
+      mask[i] = occluded[k];
+      ++matched;
+    }
+    if (matched == 0) {
+      reject("no marker name matches a model particle");
+      return;
+    }
+  }
+  const double previous_s = last_frame_time_s_;
+  const std::string why = estimator_->addFrame(stamp.toSec(), x, mask);
+  if (!why.empty()) {
+    reject(why);
+    return;
+  }
+  if (previous_s > -1e300 && std::fabs(stamp.toSec() - previous_s) > 1.0) {
+    // OnlineEstimator::addFrame started a new window (the identified model lives on).
+    ++clock_jumps_;
+    ROS_WARN_THROTTLE(5.0, "estimator_node: input clock jumped by %.3f s (looping bag, "
+                      "restarted capture or a pause): the window restarts (%llu jumps so far)",
+                      stamp.toSec() - previous_s,
+                      static_cast<unsigned long long>(clock_jumps_.load()));
+  }
+  last_frame_time_s_ = stamp.toSec();
+}
+
+void EstimatorNode::onStatsTimer(const ros::WallTimerEvent&) {
+  const InputCounters c = estimator_->counters();
+  std_msgs::String msg;
+  msg.data = "accepted=" + std::to_string(c.accepted) + " rejected=" +
+             std::to_string(rejected_.load()) + " occluded=" + std::to_string(c.occluded_samples) +
+             " rejected_time=" + std::to_string(c.rejected_time) + " rejected_size=" +
+             std::to_string(c.rejected_size) + " clock_jumps=" + std::to_string(clock_jumps_.load()) +
+             " updates=" + std::to_string(updates_.load());
+  stats_pub_.publish(msg);
+}
+
+void EstimatorNode::workerLoop() {
+  while (!stop_ && ros::ok()) {
+    bool updated = false;
+    try {
+      updated = estimator_->update();
+    } catch (const std::exception& e) {
+      ROS_ERROR_THROTTLE(5.0, "estimator_node: update failed: %s", e.what());
+    }
+    if (updated)
+      ++updates_;
+    else
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+}
+
+void EstimatorNode::bagLoop() {
+  Trajectory bag;
+  try {
+    bag = readBag(options_.bag, options_.bag_topic);
+  } catch (const InputError& e) {
+    ROS_FATAL("estimator_node: ~bag: %s", e.what());
+    ros::shutdown();
+    return;
+  }
+  ROS_INFO("estimator_node: replaying %d frames of %s", bag.numFrames(), options_.bag.c_str());
+  const int n = bag.numMarkers();
+  const auto wall_start = std::chrono::steady_clock::now();
+  for (int t = 0; t < bag.numFrames() && !stop_ && ros::ok(); ++t) {
+    if (options_.bag_rate > 0.0) {
+      const double due_s = (bag.times_s[t] - bag.times_s[0]) / options_.bag_rate;
+      std::this_thread::sleep_until(wall_start + std::chrono::duration<double>(due_s));
+    }
+    std::vector<Eigen::Vector3d> x(bag.positions_m.begin() + t * n,
+                                   bag.positions_m.begin() + (t + 1) * n);
+    std::vector<uint8_t> occ(bag.occluded.begin() + t * n, bag.occluded.begin() + (t + 1) * n);
+    ros::Time stamp;
+    stamp.fromSec(bag.times_s[t]);
+    const uint64_t before = updates_;
+    addObservation(stamp, "", bag.marker_names, std::move(x), std::move(occ));
+    if (options_.bag_rate == 0.0 && t + 1 >= options_.estimator.min_frames) {
+      // As fast as the estimator keeps up: every window position gets one update.
+      while (updates_ == before && !stop_ && ros::ok())
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  }
+  ROS_INFO("estimator_node: bag replay finished; identification goes on on the last window");
+}
+
+void EstimatorNode::onPublishTimer(const ros::WallTimerEvent&) {
+  const Estimate e = estimator_->estimate();
+  if (!e.valid) return;
+  if (e.generation != last_published_generation_) {
+    last_published_generation_ = e.generation;
+    motion_model_estimation::ModelEstimate msg;
+    msg.header.stamp = ros::Time::now();
+    msg.header.frame_id = fixed_frame_;
+    msg.generation = e.generation;
+    msg.evaluations = e.evaluations;
+    msg.global_cost = e.global_cost;
+    msg.window_frames = e.window_frames;
+    msg.parameter_names = e.parameter_names;
+    msg.values = e.values;
+    msg.std_devs = e.std_devs;
+    msg.stable = e.stable;
+    estimate_pub_.publish(msg);
+  }
+  if (options_.publish_markers && markers_pub_.getNumSubscribers() > 0) publishMarkers(e);
+}
+
+void EstimatorNode::publishMarkers(const Estimate& e) {
+  const Trajectory window = estimator_->window();
+  const int frames = window.numFrames();
+  if (frames < 2) return;
+  const Model model = estimator_->currentModel();
+  const int n = window.numMarkers();
+  MarkerScene scene;
+  scene.frame_id = fixed_frame_;
+  scene.stamp.fromSec(window.times_s.back());
+  scene.particle_diameter_m = options_.particle_diameter_m;
+  for (int i = 0; i < n; ++i) {
+    scene.observed.push_back(window.position(frames - 1, i));
+    scene.observed_occluded.push_back(window.isOccluded(frames - 1, i));
+  }
+  if (frames >= 3) {
+    // One-step prediction of the latest frame from the two before it.
+    Trajectory last3 = window;
+    const int first = frames - 3;
+    last3.times_s.assign(window.times_s.begin() + first, window.times_s.end());
+    last3.frame_numbers.assign(window.frame_numbers.begin() + first, window.frame_numbers.end());
+    last3.positions_m.assign(window.positions_m.begin() + first * n, window.positions_m.end());
+    last3.occluded.assign(window.occluded.begin() + first * n, window.occluded.end());
+    const Trajectory pred = OnlineEstimator::rollout(model, last3, 2);
+    if (pred.numFrames() == 2)
+      for (int i = 0; i < n; ++i) scene.predicted.push_back(pred.position(1, i));
+  }
+  // The long reconstruction from the window start (the paper's Fig. 2).
+  const Trajectory recon = OnlineEstimator::rollout(model, window, frames - 1);
+  if (recon.numFrames() == frames - 1) {
+    scene.reconstruction_trails.assign(n, {});
+    for (int i = 0; i < n; ++i) {
+      scene.reconstructed.push_back(recon.position(frames - 2, i));
+      for (int t = 0; t < recon.numFrames(); ++t)
+        scene.reconstruction_trails[i].push_back(recon.position(t, i));
+    }
+  }
+  double max_local = 0.0;
+  for (double c : e.local_costs) max_local = std::max(max_local, c);
+  for (const Bond& b : model.bonds) {
+    const BondType& type = model.bond_types[b.type];
+    if (type.kind != BondKind::kSpring) continue;
+    const int i = b.particles[0], j = b.particles[1];
+    scene.bonds.emplace_back(i, j);
+    if (options_.color_bonds_by == "strain") {
+      const double rest = type.value(kRestLength);
+      const double len = (scene.observed[j] - scene.observed[i]).norm();
+      scene.bond_values.push_back(rest > 0 ? len / rest - 1.0 : 0.0);
+    } else {
+      const double c = i < static_cast<int>(e.local_costs.size()) && j < static_cast<int>(e.local_costs.size())
+                           ? 0.5 * (e.local_costs[i] + e.local_costs[j]) : 0.0;
+      scene.bond_values.push_back(c);
+    }
+  }
+  if (options_.color_bonds_by == "local_cost") {
+    scene.bond_value_lo = 0.0;
+    scene.bond_value_hi = max_local > 0 ? max_local : 1.0;
+  }
+  char text[160];
+  std::snprintf(text, sizeof(text), "generation %u  cost %.3g m^2  %s", e.generation,
+                e.global_cost, e.stable ? "stable" : "UNSTABLE");
+  scene.text = text;
+  markers_pub_.publish(buildMarkers(scene));
+}
+
+bool EstimatorNode::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  estimator_->reset(false);
+  last_published_generation_ = 0;
+  res.success = true;
+  res.message = "population cleared; identification restarts on the current window";
+  return true;
+}
+
+std::string EstimatorNode::exportYaml(const Estimate& e) const {
+  Model model = estimator_->currentModel();
+  // currentModel() fills in the estimate of its own moment and the worker may have moved on
+  // since `e` was taken: write e's values, so that values, generation, cost and std agree.
+  const std::vector<ParamRef> refs = freeParameters(model);
+  bool same_parameters = e.valid && refs.size() == e.values.size();
+  for (size_t k = 0; same_parameters && k < refs.size(); ++k)
+    same_parameters = refs[k].name == e.parameter_names[k];
+  if (same_parameters) setValues(model, refs, e.values);
+  IdentificationInfo info;
+  info.method = "es-online";
+  info.global_cost = e.global_cost;
+  info.frames = static_cast<int>(e.window_frames);
+  info.generations = static_cast<int>(e.generation);
+  for (size_t k = 0; k < e.parameter_names.size() && k < e.std_devs.size(); ++k)
+    if (std::isfinite(e.std_devs[k])) {
+      info.std_names.push_back(e.parameter_names[k]);
+      info.std_values.push_back(e.std_devs[k]);
+    }
+  return modelToYaml(model, same_parameters ? &info : nullptr);
+}
+
+void EstimatorNode::onAutosaveTimer(const ros::WallTimerEvent&) {
+  const Estimate e = estimator_->estimate();
+  if (!e.valid) return;
+  try {
+    writeFileAtomically(autosave_target_, exportYaml(e));  // temp file + rename: never torn
+  } catch (const std::exception& ex) {
+    ROS_ERROR_THROTTLE(30.0, "estimator_node: autosave failed: %s", ex.what());
+  }
+}
+
+bool EstimatorNode::onExport(motion_model_estimation::ExportModel::Request& req,
+                             motion_model_estimation::ExportModel::Response& res) {
+  try {
+    res.yaml = exportYaml(estimator_->estimate());
+    if (!req.path.empty()) {
+      std::string error;
+      const std::string target = confinePath(options_.model_dir, req.path, true, &error);
+      if (target.empty()) throw InputError("export refused: " + error);
+      writeFileAtomically(target, res.yaml);
+      res.message = "model written to " + target;
+    } else {
+      res.message = "model returned";
+    }
+    res.success = true;
+  } catch (const std::exception& ex) {
+    res.success = false;
+    res.message = ex.what();
+  }
+  return true;  // domain errors travel in the response, the call itself succeeds
+}
+
+bool EstimatorNode::onLoad(motion_model_estimation::LoadModel::Request& req,
+                           motion_model_estimation::LoadModel::Response& res) {
+  try {
+    std::string error;
+    const std::string source = confinePath(options_.model_dir, req.path, false, &error);
+    if (source.empty()) throw InputError("load refused: " + error);
+    estimator_->replaceModel(loadModelFile(source));
+    {
+      std::lock_guard<std::mutex> lock(names_mutex_);
+      cached_names_.clear();
+    }
+    last_published_generation_ = 0;
+    res.success = true;
+    res.message = "model loaded from " + req.path;
+  } catch (const std::exception& ex) {
+    res.success = false;
+    res.message = ex.what();
+  }
+  return true;
+}
+
+void EstimatorNode::run() {
+  ros::AsyncSpinner spinner(2);  // callbacks and services never wait for identification
+  spinner.start();
+  worker_ = std::thread(&EstimatorNode::workerLoop, this);
+  if (!options_.bag.empty()) bag_thread_ = std::thread(&EstimatorNode::bagLoop, this);
+  ros::waitForShutdown();
+  stop_ = true;
+  worker_.join();
+  if (bag_thread_.joinable()) bag_thread_.join();
+  spinner.stop();
+}
+
+}  // namespace mme

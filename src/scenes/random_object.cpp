@@ -1,0 +1,94 @@
+#include "motion_model_estimation/scenes/random_object.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <string>
+#include <utility>
+
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/random.h"
+
+namespace mme {
+
+Model makeRandomObject(const RandomObjectSpec& spec) {
+  const int n = spec.particles;
+  if (n < 2 || spec.bond_types < 1 || spec.bonds < n - 1 || spec.bonds < spec.bond_types ||
+      spec.bonds > n * (n - 1) / 2 || !(spec.frame_rate_hz > 0.0) || !(spec.size_m > 0.0))
+    throw InputError("random object: impossible spec (need particles >= 2, bonds >= particles-1, "
+                     "bonds >= bond_types, bonds <= particles*(particles-1)/2)");
+  Random random(spec.seed);
+  Model model;
+  model.frame_rate_hz = spec.frame_rate_hz;
+  model.frame_id = "world";
+  char name[32];
+  for (int i = 0; i < n; ++i) {
+    Particle p;
+    std::snprintf(name, sizeof(name), "m%02d", i);
+    p.name = name;
+    p.mass_kg = 0.5 + 1.5 * random.uniform();
+    for (int c = 0; c < 3; ++c) {
+      p.position_m[c] = spec.size_m * random.uniform();
+      p.velocity_mps[c] = 0.1 * (random.uniform() - 0.5);
+    }
+    model.particles.push_back(p);
+  }
+  // Bonds: a spanning tree joining each particle to its nearest earlier one (connected), then
+  // the shortest remaining pairs (a compact, well-braced object).
+  std::set<std::pair<int, int>> used;
+  std::vector<std::pair<int, int>> pairs;
+  auto dist = [&](int a, int b) {
+    return (model.particles[a].position_m - model.particles[b].position_m).norm();
+  };
+  for (int i = 1; i < n; ++i) {
+    int best = 0;
+    for (int j = 1; j < i; ++j)
+      if (dist(i, j) < dist(i, best)) best = j;
+    pairs.emplace_back(best, i);
+    used.insert({best, i});
+  }
+  std::vector<std::pair<double, std::pair<int, int>>> rest;
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b)
+      if (!used.count({a, b})) rest.push_back({dist(a, b), {a, b}});
+  std::sort(rest.begin(), rest.end());
+  for (size_t k = 0; static_cast<int>(pairs.size()) < spec.bonds && k < rest.size(); ++k)
+    pairs.push_back(rest[k].second);
+  // Types round-robin over bonds, in a shuffled bond order so each type spans the object.
+  for (size_t k = pairs.size(); k > 1; --k) std::swap(pairs[k - 1], pairs[random.index(static_cast<int>(k))]);
+  const double h = 1.0 / spec.frame_rate_hz;
+  double min_mass = 1e300;
+  for (const Particle& p : model.particles) min_mass = std::min(min_mass, p.mass_kg);
+  // Stiffest allowed spring: a particle may sit on several springs; keep omega h < ~0.3 with a
+  // margin for up to ~6 springs on a particle.
+  const double k_max = std::min(200.0, 0.09 * min_mass / (h * h) / 6.0);
+  std::vector<double> type_length_sum(spec.bond_types, 0.0);
+  std::vector<int> type_count(spec.bond_types, 0);
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    const int t = static_cast<int>(k % spec.bond_types);
+    type_length_sum[t] += dist(pairs[k].first, pairs[k].second);
+    ++type_count[t];
+    Bond bond;
+    bond.type = t;
+    bond.particles = {{pairs[k].first, pairs[k].second, -1}};
+    model.bonds.push_back(bond);
+  }
+  for (int t = 0; t < spec.bond_types; ++t) {
+    BondType type;
+    std::snprintf(name, sizeof(name), "k%02d", t);
+    type.name = name;
+    type.kind = BondKind::kSpring;
+    const double k = k_max * std::exp(std::log(0.1) * random.uniform());  // [k_max/10, k_max]
+    // Rest length 0.85..1.15 of the type's mean initial length: the object starts strained.
+    const double length = type_length_sum[t] / type_count[t] * (0.85 + 0.3 * random.uniform());
+    Param& ks = type.param(kStiffness);
+    ks = Param{k, true, true, true, k / 10.0, k * 10.0, true, true};
+    Param& ls = type.param(kRestLength);
+    ls = Param{length, true, true, true, length / 2.0, length * 2.0, true, true};
+    model.bond_types.push_back(type);
+  }
+  return model;
+}
+
+}  // namespace mme

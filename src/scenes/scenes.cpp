@@ -1,0 +1,617 @@
+// Built-in scenes of SPEC section 8, after the experiments of the paper's section 4. Each scene
+// is a model holding the TRUE parameter values with free flags on what identification should
+// recover (the value of a free parameter is the truth, kept for comparisons), and bounds that
+// bracket the truth (x10 for positive magnitudes, searched in log space; x2 for lengths).
+//
+// Everything is deterministic: randomness comes from mme::Random with fixed seeds, whose
+// distributions are platform independent.
+#include "motion_model_estimation/scenes/scenes.h"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <string>
+#include <utility>
+
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/random.h"
+#include "motion_model_estimation/core/simulator.h"
+
+namespace mme {
+namespace {
+
+const double kPi = 3.14159265358979323846;
+
+Param fixedParam(double value) {
+  Param p;
+  p.value = value;
+  p.present = p.has_value = true;
+  return p;
+}
+
+Param freeParam(double value, double min, double max) {
+  Param p = fixedParam(value);
+  p.free = true;
+  p.min = min;
+  p.max = max;
+  p.has_min = p.has_max = true;
+  return p;
+}
+
+/// Positive magnitude (stiffness, damping, ...): bounds [truth/10, truth*10].
+Param freeMagnitude(double value) { return freeParam(value, value / 10.0, value * 10.0); }
+/// Length (rest length, distance): bounds [truth/2, truth*2].
+Param freeLength(double value) { return freeParam(value, value / 2.0, value * 2.0); }
+
+void setGravity(Model* model, const Eigen::Vector3d& g) {
+  for (int k = 0; k < 3; ++k) model->gravity_mps2[k] = fixedParam(g[k]);
+}
+
+int addParticle(Model* model, const std::string& name, double mass_kg, const Eigen::Vector3d& x,
+                const Eigen::Vector3d& v = Eigen::Vector3d::Zero(), bool fixed = false,
+                const std::string& group = "") {
+  Particle p;
+  p.name = name;
+  p.mass_kg = mass_kg;
+  p.position_m = x;
+  p.velocity_mps = v;
+  p.fixed = fixed;
+  p.group = group;
+  model->particles.push_back(p);
+  return static_cast<int>(model->particles.size()) - 1;
+}
+
+int addType(Model* model, const BondType& type) {
+  model->bond_types.push_back(type);
+  return static_cast<int>(model->bond_types.size()) - 1;
+}
+
+void addBond(Model* model, int type, int a, int b = -1, int c = -1) {
+  Bond bond;
+  bond.type = type;
+  bond.particles = {{a, b, c}};
+  model->bonds.push_back(bond);
+}
+
+double roundTo(double x, double step) { return std::round(x / step) * step; }
+
+// ------------------------------------------------------------------------------------------
+// paper_object: the paper's Fig. 1 set-up (section 4.1). 15 masses, 10 linear spring types
+// s00..s09 (stiffness + rest_length free = 20 parameters), 31 bonds, 100 frames at 100 Hz.
+// A connected floating object (no gravity, nothing fixed): rest lengths differ from the initial
+// distances by 5..12 % and the particles start with small random velocities, so it vibrates.
+// Bonds are grouped into types by length (similar lengths share a type), which keeps the
+// initial strain, hence the amplitude, at the centimetre level.
+Scene makePaperObject() {
+  constexpr int kParticles = 15, kTypes = 10, kBonds = 31;
+  Random random(0x9a9e70b1ec7ULL);
+  Scene scene;
+  Model& model = scene.model;
+  model.frame_rate_hz = 100.0;
+  model.substeps = 1;
+  setGravity(&model, Eigen::Vector3d::Zero());
+  // Particles: rejection-sampled in a 0.45 x 0.35 x 0.3 m box, at least 0.1 m apart.
+  std::vector<Eigen::Vector3d> x;
+  while (static_cast<int>(x.size()) < kParticles) {
+    Eigen::Vector3d p(roundTo(0.45 * random.uniform(), 1e-3), roundTo(0.35 * random.uniform(), 1e-3),
+                      roundTo(0.30 * random.uniform(), 1e-3));
+    bool far_enough = true;
+    for (const Eigen::Vector3d& q : x) far_enough = far_enough && (p - q).norm() >= 0.1;
+    if (far_enough) x.push_back(p);
+  }
+  char name[32];
+  for (int i = 0; i < kParticles; ++i) {
+    Eigen::Vector3d v;
+    for (int c = 0; c < 3; ++c) v[c] = roundTo(0.1 * (random.uniform() - 0.5), 1e-3);  // +-5 cm/s
+    std::snprintf(name, sizeof(name), "m%02d", i);
+    addParticle(&model, name, roundTo(0.5 + 1.5 * random.uniform(), 0.01), x[i], v);
+  }
+  // Bonds: a minimum spanning tree (Prim) keeps the object connected with short bonds; then the
+  // shortest remaining pairs until 31.
+  auto dist = [&](int a, int b) { return (x[a] - x[b]).norm(); };
+  std::set<std::pair<int, int>> used;
+  std::vector<std::pair<int, int>> pairs;
+  std::vector<bool> in_tree(kParticles, false);
+  in_tree[0] = true;
+  for (int added = 1; added < kParticles; ++added) {
+    int best_a = -1, best_b = -1;
+    for (int a = 0; a < kParticles; ++a)
+      for (int b = 0; b < kParticles; ++b)
+        if (in_tree[a] && !in_tree[b] && (best_a < 0 || dist(a, b) < dist(best_a, best_b))) {
+          best_a = a;
+          best_b = b;
+        }
+    in_tree[best_b] = true;
+    pairs.emplace_back(std::min(best_a, best_b), std::max(best_a, best_b));
+    used.insert(pairs.back());
+  }
+  std::vector<std::pair<double, std::pair<int, int>>> candidates;
+  for (int a = 0; a < kParticles; ++a)
+    for (int b = a + 1; b < kParticles; ++b)
+      if (!used.count({a, b})) candidates.push_back({dist(a, b), {a, b}});
+  std::sort(candidates.begin(), candidates.end());
+  for (size_t k = 0; static_cast<int>(pairs.size()) < kBonds; ++k) pairs.push_back(candidates[k].second);
+  // Types by length rank: type t gets the bonds of ranks 3t..3t+2 (the 31st goes to s09).
+  std::sort(pairs.begin(), pairs.end(), [&](const std::pair<int, int>& p, const std::pair<int, int>& q) {
+    return dist(p.first, p.second) < dist(q.first, q.second);
+  });
+  std::vector<double> length_sum(kTypes, 0.0);
+  std::vector<int> count(kTypes, 0);
+  for (int b = 0; b < kBonds; ++b) {
+    const int t = std::min(b / 3, kTypes - 1);
+    length_sum[t] += dist(pairs[b].first, pairs[b].second);
+    ++count[t];
+    addBond(&model, t, pairs[b].first, pairs[b].second);
+  }
+  // Stiffness log-uniform in [10, 80] N/m; rest length = the type's mean initial length
+  // shortened or lengthened by 5..12 %.
+  for (int t = 0; t < kTypes; ++t) {
+    BondType type;
+    std::snprintf(name, sizeof(name), "s%02d", t);
+    type.name = name;
+    type.kind = BondKind::kSpring;
+    const double k = roundTo(10.0 * std::exp(std::log(8.0) * random.uniform()), 0.1);
+    const double sign = random.uniform() < 0.5 ? -1.0 : 1.0;
+    const double strain = sign * (0.05 + 0.07 * random.uniform());
+    const double length = roundTo(length_sum[t] / count[t] * (1.0 + strain), 1e-4);
+    type.param(kStiffness) = freeMagnitude(k);
+    type.param(kRestLength) = freeLength(length);
+    addType(&model, type);
+  }
+  scene.default_frames = 100;
+  return scene;
+}
+
+// ------------------------------------------------------------------------------------------
+// provot_cloth: Provot's (1995) cloth (section 4.2, Table I). A 17 x 17 mesh, 1.5 m square
+// (period 0.09375 m), released horizontally in the x-y plane and hanging from the corners c_0_0
+// and c_0_16 under gravity. Six spring types, 3 free parameters each (stiffness, rest_length,
+// cubic stiffness_nl): structural struct_h/struct_v (rest 0.09375), shear shear_d1/shear_d2
+// (0.132583), flexion flex_h/flex_v (double-length springs, 0.1875). Provot's maximum
+// elongation rate tau_c = 0.5 is free on both structural types (20 free parameters in all).
+// Spring damping and an air drag (viscosity type "air", 5 /s) are known and fixed: they only
+// make the cloth settle (spring dampers alone barely damp its pendulum swing about the corners).
+// 100 Hz with 5 substeps (stiffest mode omega dt ~ 0.4). The reference data set is the
+// equilibrium, a single frame; default_frames (300) shows the fall and most of the settling.
+constexpr int kClothSide = 17;
+constexpr double kClothPeriodM = 0.09375;
+// Whole cloth [kg]: heavy enough for the clamp to hold the springs at the two corners (2 struct_h
+// and 2 struct_v springs at exactly (1 + tau) L at equilibrium; 0.1 kg clamps none), light
+// enough for the rest to stay elastic (the mesh stretches from 1.5 m to ~1.79 m of drop).
+constexpr double kClothMassKg = 0.2;
+constexpr int kClothMaxSettleFrames = 20000;
+constexpr double kClothRestSpeedMps = 1e-6;  // observable (frame-to-frame) speed ending phase 1
+constexpr int kMaxNewtonIterations = 12;
+constexpr double kFixedPointTolM = 1e-14;  // max |P(x) - x| ending the Newton polish
+
+struct EquilibriumReport {
+  int newton_iterations = 0;
+  int jacobians = 0;
+  double residual_m = 0.0;  ///< max |P(x) - x| at the end
+};
+
+/// Polishes positions x (in place) into a fixed point of the static prediction P: one frame of
+/// the motion law from x with zero velocity, exactly what the cost predicts from a motionless
+/// observation. Newton's method on P(x) - x over the free coordinates, with a finite-difference
+/// Jacobian reused while it keeps converging fast.
+EquilibriumReport polishStaticEquilibrium(const Model& model, std::vector<Eigen::Vector3d>* x) {
+  Simulator simulator(model);
+  const double h = 1.0 / model.frame_rate_hz;
+  const int n = static_cast<int>(model.particles.size());
+  std::vector<int> coords;  // free coordinates
+  for (int i = 0; i < n; ++i)
+    if (!model.particles[i].fixed)
+      for (int c = 0; c < 3; ++c) coords.push_back(3 * i + c);
+  const int m = static_cast<int>(coords.size());
+  State probe;
+  probe.x_m = *x;
+  auto residual = [&](const Eigen::VectorXd& q) {
+    for (int k = 0; k < m; ++k) probe.x_m[coords[k] / 3][coords[k] % 3] = q[k];
+    probe.v_mps.assign(n, Eigen::Vector3d::Zero());
+    simulator.stepFrame(&probe, h);
+    Eigen::VectorXd r(m);
+    for (int k = 0; k < m; ++k) r[k] = probe.x_m[coords[k] / 3][coords[k] % 3] - q[k];
+    return r;
+  };
+  Eigen::VectorXd q(m);
+  for (int k = 0; k < m; ++k) q[k] = (*x)[coords[k] / 3][coords[k] % 3];
+  Eigen::VectorXd r = residual(q);
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu;
+  bool fresh = false, have_jacobian = false;
+  EquilibriumReport report;
+  report.residual_m = r.lpNorm<Eigen::Infinity>();
+  while (report.newton_iterations < kMaxNewtonIterations && report.residual_m > kFixedPointTolM) {
+    if (!have_jacobian) {
+      const double eps = 1e-7;
+      Eigen::MatrixXd jacobian(m, m);
+      for (int k = 0; k < m; ++k) {
+        Eigen::VectorXd qk = q;
+        qk[k] += eps;
+        jacobian.col(k) = (residual(qk) - r) / eps;
+      }
+      lu.compute(jacobian);
+      have_jacobian = fresh = true;
+      ++report.jacobians;
+    }
+    ++report.newton_iterations;
+    const Eigen::VectorXd next = q - lu.solve(r);
+    const Eigen::VectorXd next_r = residual(next);
+    const double norm = next_r.lpNorm<Eigen::Infinity>();
+    if (!(norm < report.residual_m)) {  // stale Jacobian or a changed clamp set: rebuild it
+      if (fresh) break;                 // even a fresh one does not help: stop here
+      have_jacobian = false;
+      continue;
+    }
+    fresh = false;
+    if (norm > 0.1 * report.residual_m) have_jacobian = false;  // slow: refresh next time
+    q = next;
+    r = next_r;
+    report.residual_m = norm;
+  }
+  for (int k = 0; k < m; ++k) (*x)[coords[k] / 3][coords[k] % 3] = q[k];
+  return report;
+}
+
+/// The cloth's static data set: positions x with P(x) = x (see polishStaticEquilibrium).
+/// Phase 1 lets the cloth fall and settle dynamically until its frame-to-frame speed is below
+/// kClothRestSpeedMps. That state is not exactly a fixed point of P: the Provot clamp corrects
+/// positions only, so a clamped particle at rest keeps a velocity whose damping forces act on
+/// its neighbours, which a prediction started from zero velocity does not see. Phase 2 polishes
+/// it with Newton's method, so that the true model's static cost is ~0 (~1e-29 m^2).
+Trajectory settleToEquilibrium(const Model& model) {
+  Simulator simulator(model);
+  const double h = 1.0 / model.frame_rate_hz;
+  const int n = static_cast<int>(model.particles.size());
+  State state = simulator.initialState();
+  std::vector<Eigen::Vector3d> previous = state.x_m;
+  int frames = 0;
+  for (frames = 1; frames <= kClothMaxSettleFrames; ++frames) {
+    simulator.stepFrame(&state, h);
+    double max_speed = 0.0;
+    for (int i = 0; i < n; ++i) max_speed = std::max(max_speed, (state.x_m[i] - previous[i]).norm() / h);
+    previous = state.x_m;
+    if (max_speed < kClothRestSpeedMps) break;
+  }
+  polishStaticEquilibrium(model, &state.x_m);
+  Trajectory data;
+  for (const Particle& p : model.particles) data.marker_names.push_back(p.name);
+  data.frame_rate_hz = model.frame_rate_hz;
+  data.resize(1);
+  for (int i = 0; i < n; ++i) {
+    data.positions_m[i] = state.x_m[i];
+    data.occluded[i] = 0;
+  }
+  return data;
+}
+
+Scene makeProvotCloth() {
+  Scene scene;
+  Model& model = scene.model;
+  model.frame_rate_hz = 100.0;
+  model.substeps = 5;  // stiffest mode: omega dt ~ 0.4
+  setGravity(&model, Eigen::Vector3d(0.0, 0.0, -9.81));
+  const double mass = kClothMassKg / (kClothSide * kClothSide);
+  char name[32];
+  for (int r = 0; r < kClothSide; ++r)
+    for (int c = 0; c < kClothSide; ++c) {
+      std::snprintf(name, sizeof(name), "c_%d_%d", r, c);
+      const bool fixed = r == 0 && (c == 0 || c == kClothSide - 1);
+      addParticle(&model, name, mass, Eigen::Vector3d(c * kClothPeriodM, -r * kClothPeriodM, 0.0),
+                  Eigen::Vector3d::Zero(), fixed);
+    }
+  auto id = [](int r, int c) { return r * kClothSide + c; };
+  struct TypeSpec {
+    const char* name;
+    double rest_length, stiffness, stiffness_nl, damping;
+    bool clamped;
+  };
+  const double shear = 0.132583;  // Table I: sqrt(2) * 0.09375, rounded as printed
+  const TypeSpec specs[6] = {
+      {"struct_h", kClothPeriodM, 4.0, 400.0, 0.004, true},
+      {"struct_v", kClothPeriodM, 4.0, 400.0, 0.004, true},
+      {"shear_d1", shear, 2.0, 100.0, 0.002, false},
+      {"shear_d2", shear, 2.0, 100.0, 0.002, false},
+      {"flex_h", 2.0 * kClothPeriodM, 1.0, 25.0, 0.001, false},
+      {"flex_v", 2.0 * kClothPeriodM, 1.0, 25.0, 0.001, false},
+  };
+  for (const TypeSpec& s : specs) {
+    BondType type;
+    type.name = s.name;
+    type.kind = BondKind::kSpring;
+    type.param(kStiffness) = freeMagnitude(s.stiffness);
+    type.param(kRestLength) = freeLength(s.rest_length);
+    type.param(kStiffnessNl) = freeMagnitude(s.stiffness_nl);
+    type.param(kDamping) = fixedParam(s.damping);
+    if (s.clamped) type.param(kMaxElongation) = freeMagnitude(0.5);
+    addType(&model, type);
+  }
+  BondType air;
+  air.name = "air";
+  air.kind = BondKind::kViscosity;
+  air.param(kViscosity) = fixedParam(5.0 * mass);  // [N s/m]: decay rate 5 /s
+  const int air_type = addType(&model, air);
+  for (int r = 0; r < kClothSide; ++r)
+    for (int c = 0; c < kClothSide; ++c) {
+      if (c + 1 < kClothSide) addBond(&model, 0, id(r, c), id(r, c + 1));
+      if (r + 1 < kClothSide) addBond(&model, 1, id(r, c), id(r + 1, c));
+      if (r + 1 < kClothSide && c + 1 < kClothSide) {
+        addBond(&model, 2, id(r, c), id(r + 1, c + 1));
+        addBond(&model, 3, id(r, c + 1), id(r + 1, c));
+      }
+      if (c + 2 < kClothSide) addBond(&model, 4, id(r, c), id(r, c + 2));
+      if (r + 2 < kClothSide) addBond(&model, 5, id(r, c), id(r + 2, c));
+    }
+  for (int i = 0; i < kClothSide * kClothSide; ++i)
+    if (!model.particles[i].fixed) addBond(&model, air_type, i);
+  scene.default_frames = 300;
+  scene.reference_data = settleToEquilibrium(model);
+  return scene;
+}
+
+// ------------------------------------------------------------------------------------------
+// fluid_jet: a 2-D jet penetrating a gas (section 4.3, Table II), after Luciani's turbulent
+// fluids: no installed bonds, only conditional interactions found on the fly.
+//   gas_visc [gas,gas]            viscous: damping 2.5, damping_nl 1.25, within 1.5
+//   jet_visc [jet,gas], [jet,jet]  viscous: damping 4, damping_nl 2, within 2
+//   elast [gas,gas],[gas,jet],[jet,jet]  elastic: stiffness 2, rest 1.1 (fixed), within 1.1
+//                                  (active only below its rest length: a repulsion)
+// The 8 parameters of Table II are free. Units are arbitrary (called metres), masses 1.
+// Sizes: an 18 x 16 gas at spacing 1.7 (+-10 % jitter, so only some neighbours start within the
+// viscous range 1.5; a slight agitation) and a 3 x 20 jet at spacing 2.0 moving at 10 m/s; over
+// the 200 default frames ~81 000 interaction bonds are active in all (the paper: "about 80000"),
+// growing as the jet compresses the gas. One integration step per frame (50 Hz; damping rates
+// stay below the explicit limit), so that the paper's one-frame prediction from frame
+// differences reproduces the true model exactly (with substeps, the velocity at the end of a
+// frame differs from the frame difference and the true values no longer have zero cost).
+constexpr int kGasColumns = 18, kGasRows = 16;
+constexpr double kGasSpacing = 1.7;
+constexpr int kJetLength = 20, kJetWidth = 3;
+constexpr double kJetSpacing = 2.0;
+constexpr double kJetSpeed = 10.0;
+constexpr double kFluidFrameRateHz = 50.0;
+constexpr int kFluidSubsteps = 1;
+constexpr double kGasAgitationMps = 0.1;
+
+Scene makeFluidJet() {
+  Random random(0xf1e1d7e7ULL);
+  Scene scene;
+  Model& model = scene.model;
+  model.frame_rate_hz = kFluidFrameRateHz;
+  model.substeps = kFluidSubsteps;
+  setGravity(&model, Eigen::Vector3d::Zero());
+  char name[32];
+  // Gas: a jittered grid (+-10 % of the spacing) with a slight agitation (+-kGasAgitationMps).
+  for (int r = 0; r < kGasRows; ++r)
+    for (int c = 0; c < kGasColumns; ++c) {
+      const Eigen::Vector3d x((c + 0.2 * (random.uniform() - 0.5)) * kGasSpacing,
+                              (r + 0.2 * (random.uniform() - 0.5)) * kGasSpacing, 0.0);
+      const Eigen::Vector3d v(2.0 * kGasAgitationMps * (random.uniform() - 0.5),
+                              2.0 * kGasAgitationMps * (random.uniform() - 0.5), 0.0);
+      std::snprintf(name, sizeof(name), "gas_%03d", r * kGasColumns + c);
+      addParticle(&model, name, 1.0, x, v, false, "gas");
+    }
+  // Jet: a stream kJetWidth wide, left of the gas, centred on it, moving right.
+  const double y_centre = 0.5 * (kGasRows - 1) * kGasSpacing;
+  const double x_front = -1.5 * kGasSpacing;
+  for (int c = 0; c < kJetLength; ++c)
+    for (int w = 0; w < kJetWidth; ++w) {
+      const Eigen::Vector3d x(x_front - (c + 0.1 * (random.uniform() - 0.5)) * kJetSpacing,
+                              y_centre + (w - 0.5 * (kJetWidth - 1) + 0.1 * (random.uniform() - 0.5)) * kJetSpacing,
+                              0.0);
+      std::snprintf(name, sizeof(name), "jet_%03d", c * kJetWidth + w);
+      addParticle(&model, name, 1.0, x, Eigen::Vector3d(kJetSpeed, 0.0, 0.0), false, "jet");
+    }
+  BondType gas_visc;
+  gas_visc.name = "gas_visc";
+  gas_visc.param(kDamping) = freeMagnitude(2.5);
+  gas_visc.param(kDampingNl) = freeMagnitude(1.25);
+  gas_visc.param(kMaxDistance) = freeLength(1.5);
+  const int gv = addType(&model, gas_visc);
+  BondType jet_visc;
+  jet_visc.name = "jet_visc";
+  jet_visc.param(kDamping) = freeMagnitude(4.0);
+  jet_visc.param(kDampingNl) = freeMagnitude(2.0);
+  jet_visc.param(kMaxDistance) = freeLength(2.0);
+  const int jv = addType(&model, jet_visc);
+  BondType elast;
+  elast.name = "elast";
+  elast.param(kStiffness) = freeMagnitude(2.0);
+  elast.param(kRestLength) = fixedParam(1.1);
+  elast.param(kMaxDistance) = freeLength(1.1);
+  const int el = addType(&model, elast);
+  model.interactions = {{gv, "gas", "gas"}, {jv, "jet", "gas"}, {jv, "jet", "jet"},
+                        {el, "gas", "gas"}, {el, "gas", "jet"}, {el, "jet", "jet"}};
+  scene.default_frames = 200;
+  return scene;
+}
+
+// ------------------------------------------------------------------------------------------
+// walker: the horse of section 4.4 with its 35 markers at 50 Hz (5 per leg: leg_<fl|fr|hl|hr>_0
+// shoulder/hip .. _4 hoof; 15 body/head markers body_00..body_14), as a PASSIVE structure until
+// active muscles exist: without ground contacts a stance cannot be modelled, so the hooves are
+// fixed and the walker stands, settles under gravity and sways from its initial velocities.
+// Geometry, chosen so that all springs of a type have the same length (no prestress):
+//  - trunk, neck and head: one triangular prism truss along x, 6 cross-sections (x = -0.6 ..
+//    1.4 m, step 0.4 m) with equilateral cross-sections of edge 0.4 m: two bottom "rails" (y =
+//    +-0.2 m) and a top ridge; every rectangular face braced by one diagonal (0.566 m).
+//    Sections 0..3 are the trunk (the legs hang from the rails of sections 0 and 3), sections 4
+//    and 5 the neck and the head; a tail marker sits on a regular tetrahedron behind section 0;
+//  - legs: 4 segments of 0.4 m bent by 20 degrees at each of the 3 joints (160 degrees); the left
+//    and right legs of a pair form a braced ladder (rungs 0.4 m at the joints, X braces 0.566 m)
+//    that is stiff sideways; fore-aft bending is held by flexion bonds at the joints (knee) and
+//    at the shoulders/hips (hip: 90 degrees between the upper segment and the rail).
+// The narrow stance (0.4 m) under a high trunk needs stiff legs against sideways rocking
+// (axial stiffness x half-width^2 > weight x height), so the axial modes (up to ~460 rad/s) lie
+// far above the 50 Hz frame rate: 10 substeps, light damping (stable at 10 substeps), and the
+// walker starts from its static equilibrium so that mainly the slow sway (~5 rad/s, a few cm)
+// is excited. Even so, with substeps the frame-difference velocities of the cost are not the
+// model's, and the true values keep a small cost (~6e-5 m^2 over the 250 frames).
+constexpr double kWalkerEdgeM = 0.4;
+constexpr int kWalkerSubsteps = 10;
+constexpr double kWalkerLegMassKg[5] = {25.0, 20.0, 15.0, 12.0, 5.0};  // shoulder/hip .. hoof
+constexpr double kWalkerTrunkMassKg = 30.0;
+constexpr double kWalkerTailMassKg = 5.0;
+constexpr double kWalkerNeckMassKg = 15.0;
+constexpr double kWalkerHeadMassKg = 8.0;
+
+Scene makeWalker() {
+  Scene scene;
+  Model& model = scene.model;
+  model.frame_rate_hz = 50.0;
+  model.substeps = kWalkerSubsteps;
+  setGravity(&model, Eigen::Vector3d(0.0, 0.0, -9.81));
+  const double e = kWalkerEdgeM;
+  const double bend = 20.0 * kPi / 180.0;
+  const double leg_angles[4] = {0.0, bend, 0.0, -bend};  // segment inclinations from vertical
+  double rail_z = 0.0;
+  for (double a : leg_angles) rail_z += e * std::cos(a);
+  const double ridge_z = rail_z + e * std::sqrt(0.75);
+  // Sway (initial velocities, set at the end): growing with height, sideways and forwards.
+  auto sway = [&](const Eigen::Vector3d& x) {
+    const double s = x.z() / ridge_z;
+    return Eigen::Vector3d(0.10 * s, 0.15 * s, 0.0);
+  };
+  char name[32];
+  // Legs first: 20 markers.
+  const char* leg_names[4] = {"fl", "fr", "hl", "hr"};
+  const double leg_x[4] = {0.6, 0.6, -0.6, -0.6};
+  const double leg_y[4] = {0.2, -0.2, 0.2, -0.2};
+  int leg[4][5];
+  for (int l = 0; l < 4; ++l) {
+    Eigen::Vector3d x(leg_x[l], leg_y[l], rail_z);
+    for (int k = 0; k < 5; ++k) {
+      std::snprintf(name, sizeof(name), "leg_%s_%d", leg_names[l], k);
+      if (k == 4) x.z() = 0.0;  // exact ground contact despite rounding
+      leg[l][k] = addParticle(&model, name, kWalkerLegMassKg[k], x, Eigen::Vector3d::Zero(), k == 4);
+      if (k < 4) x += e * Eigen::Vector3d(std::sin(leg_angles[k]), 0.0, -std::cos(leg_angles[k]));
+    }
+  }
+  // Prism sections: [s][0] left rail, [s][1] right rail, [s][2] ridge.
+  constexpr int kSections = 6;
+  int section[kSections][3];
+  section[0][0] = leg[2][0];
+  section[0][1] = leg[3][0];
+  section[3][0] = leg[0][0];
+  section[3][1] = leg[1][0];
+  auto sectionPoint = [&](int s, int corner) {
+    const double x = -0.6 + e * s;
+    if (corner == 2) return Eigen::Vector3d(x, 0.0, ridge_z);
+    return Eigen::Vector3d(x, corner == 0 ? 0.2 : -0.2, rail_z);
+  };
+  int next_body = 0;
+  auto addBody = [&](const Eigen::Vector3d& x, double mass_kg) {
+    std::snprintf(name, sizeof(name), "body_%02d", next_body++);
+    return addParticle(&model, name, mass_kg, x);
+  };
+  for (int s = 0; s < 4; ++s) section[s][2] = addBody(sectionPoint(s, 2), kWalkerTrunkMassKg);  // 00-03
+  for (int corner = 0; corner < 2; ++corner)  // 04-07: rails between the legs
+    for (int s = 1; s <= 2; ++s) section[s][corner] = addBody(sectionPoint(s, corner), kWalkerTrunkMassKg);
+  // Tail (body_08): apex of a regular tetrahedron on the rear face.
+  const Eigen::Vector3d rear = (sectionPoint(0, 0) + sectionPoint(0, 1) + sectionPoint(0, 2)) / 3.0;
+  const int tail = addBody(rear - Eigen::Vector3d(e * std::sqrt(2.0 / 3.0), 0.0, 0.0), kWalkerTailMassKg);
+  for (int s = 4; s < kSections; ++s)  // 09-11 neck, 12-14 head
+    for (int corner = 0; corner < 3; ++corner)
+      section[s][corner] = addBody(sectionPoint(s, corner), s == 4 ? kWalkerNeckMassKg : kWalkerHeadMassKg);
+  // Bond types.
+  struct SpringSpec {
+    const char* name;
+    double rest_length, stiffness, damping;
+  };
+  const double diag = e * std::sqrt(2.0);
+  // Damping stays at ~1/5 of the explicit integration's stability limit at 10 substeps.
+  const SpringSpec springs[6] = {{"leg_spring", e, 4.0e5, 120.0},  {"leg_brace", diag, 2.0e5, 60.0},
+                                 {"body_spring", e, 4.0e5, 120.0}, {"body_brace", diag, 2.0e5, 60.0},
+                                 {"neck_spring", e, 1.5e5, 40.0},  {"neck_brace", diag, 1.0e5, 20.0}};
+  int spring_type[6];
+  for (int t = 0; t < 6; ++t) {
+    BondType type;
+    type.name = springs[t].name;
+    type.param(kStiffness) = freeMagnitude(springs[t].stiffness);
+    type.param(kDamping) = freeMagnitude(springs[t].damping);
+    type.param(kRestLength) = freeLength(springs[t].rest_length);
+    spring_type[t] = addType(&model, type);
+  }
+  struct FlexionSpec {
+    const char* name;
+    double rest_angle, stiffness, damping;
+  };
+  const FlexionSpec flexions[2] = {{"knee", kPi - bend, 4.0e4, 40.0}, {"hip", 0.5 * kPi, 8.0e4, 80.0}};
+  int flexion_type[2];
+  for (int t = 0; t < 2; ++t) {
+    BondType type;
+    type.name = flexions[t].name;
+    type.kind = BondKind::kFlexion;
+    type.param(kStiffness) = freeMagnitude(flexions[t].stiffness);
+    type.param(kRestAngle) = freeParam(flexions[t].rest_angle, 0.5 * flexions[t].rest_angle,
+                                       std::min(kPi, 2.0 * flexions[t].rest_angle));
+    type.param(kDamping) = fixedParam(flexions[t].damping);
+    flexion_type[t] = addType(&model, type);
+  }
+  const int leg_spring = spring_type[0], leg_brace = spring_type[1];
+  // Legs: segments, joints, shoulders/hips (towards the middle of the trunk).
+  for (int l = 0; l < 4; ++l) {
+    for (int k = 0; k < 4; ++k) addBond(&model, leg_spring, leg[l][k], leg[l][k + 1]);
+    for (int k = 1; k <= 3; ++k)
+      addBond(&model, flexion_type[0], leg[l][k - 1], leg[l][k], leg[l][k + 1]);
+    addBond(&model, flexion_type[1], leg[l][1], leg[l][0],
+            section[leg_x[l] > 0 ? 2 : 1][leg_y[l] > 0 ? 0 : 1]);
+  }
+  // Ladders: (fl, fr) and (hl, hr); rungs at the joints, X braces in every storey.
+  for (int pair = 0; pair < 2; ++pair) {
+    const int* left = leg[2 * pair];
+    const int* right = leg[2 * pair + 1];
+    for (int k = 1; k <= 3; ++k) addBond(&model, leg_spring, left[k], right[k]);
+    for (int k = 0; k < 4; ++k) {
+      addBond(&model, leg_brace, left[k], right[k + 1]);
+      addBond(&model, leg_brace, right[k], left[k + 1]);
+    }
+  }
+  // Prism: cross-section triangles, then per bay 3 longitudinal edges and 3 face diagonals;
+  // sections/bays 0..3 are trunk (body_*), the rest neck/head (neck_*).
+  for (int s = 0; s < kSections; ++s) {
+    const int edge = s < 4 ? spring_type[2] : spring_type[4];
+    addBond(&model, edge, section[s][0], section[s][1]);
+    addBond(&model, edge, section[s][0], section[s][2]);
+    addBond(&model, edge, section[s][1], section[s][2]);
+  }
+  for (int s = 0; s + 1 < kSections; ++s) {
+    const int edge = s < 3 ? spring_type[2] : spring_type[4];
+    const int brace = s < 3 ? spring_type[3] : spring_type[5];
+    for (int corner = 0; corner < 3; ++corner) addBond(&model, edge, section[s][corner], section[s + 1][corner]);
+    addBond(&model, brace, section[s][0], section[s + 1][2]);
+    addBond(&model, brace, section[s][1], section[s + 1][2]);
+    addBond(&model, brace, section[s][0], section[s + 1][1]);
+  }
+  for (int corner = 0; corner < 3; ++corner) addBond(&model, spring_type[2], tail, section[0][corner]);
+  // Start from the static equilibrium under gravity (rest lengths stay those of the unloaded
+  // geometry): a sudden load would ring the stiff axial modes, far above the frame rate, which
+  // the frame-difference velocities of the cost cannot follow. Then the sway velocities.
+  std::vector<Eigen::Vector3d> x;
+  for (const Particle& p : model.particles) x.push_back(p.position_m);
+  polishStaticEquilibrium(model, &x);
+  for (size_t i = 0; i < x.size(); ++i) {
+    Particle& p = model.particles[i];
+    p.position_m = x[i];
+    p.velocity_mps = p.fixed ? Eigen::Vector3d::Zero() : sway(x[i]);
+  }
+  scene.default_frames = 250;
+  return scene;
+}
+
+}  // namespace
+
+std::vector<std::string> sceneNames() { return {"paper_object", "provot_cloth", "fluid_jet", "walker"}; }
+
+Scene makeScene(const std::string& name) {
+  if (name == "paper_object") return makePaperObject();
+  if (name == "provot_cloth") return makeProvotCloth();
+  if (name == "fluid_jet") return makeFluidJet();
+  if (name == "walker") return makeWalker();
+  std::string known;
+  for (const std::string& n : sceneNames()) known += (known.empty() ? "" : ", ") + n;
+  throw InputError("unknown scene '" + name + "' (known: " + known + ")");
+}
+
+}  // namespace mme

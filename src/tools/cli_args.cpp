@@ -1,0 +1,57 @@
+#include "cli_args.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+
+#include "motion_model_estimation/core/error.h"
+
+namespace mme {
+
+CliArgs::CliArgs(int argc, char** argv, const std::set<std::string>& valued,
+                 const std::set<std::string>& flags) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.rfind("--", 0) != 0) throw InputError("unexpected argument '" + arg + "'");
+    const std::string key = arg.substr(2);
+    if (values_.count(key)) throw InputError("option --" + key + " given twice");
+    if (flags.count(key)) {
+      values_[key] = "1";
+    } else if (valued.count(key)) {
+      if (i + 1 >= argc) throw InputError("option --" + key + " needs a value");
+      values_[key] = argv[++i];
+    } else {
+      throw InputError("unknown option --" + key);
+    }
+  }
+}
+
+std::string CliArgs::get(const std::string& key, const std::string& fallback) const {
+  auto it = values_.find(key);
+  return it == values_.end() ? fallback : it->second;
+}
+
+long CliArgs::getInt(const std::string& key, long fallback, long min, long max) const {
+  auto it = values_.find(key);
+  if (it == values_.end()) return fallback;
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(it->second.c_str(), &end, 10);
+  if (errno != 0 || end == it->second.c_str() || *end != '\0' || v < min || v > max)
+    throw InputError("option --" + key + " must be an integer in [" + std::to_string(min) + ", " +
+                     std::to_string(max) + "], got '" + it->second + "'");
+  return v;
+}
+
+double CliArgs::getDouble(const std::string& key, double fallback, double min, double max) const {
+  auto it = values_.find(key);
+  if (it == values_.end()) return fallback;
+  char* end = nullptr;
+  const double v = std::strtod(it->second.c_str(), &end);
+  if (end == it->second.c_str() || *end != '\0' || !std::isfinite(v) || v < min || v > max)
+    throw InputError("option --" + key + " must be a number in [" + std::to_string(min) + ", " +
+                     std::to_string(max) + "], got '" + it->second + "'");
+  return v;
+}
+
+}  // namespace mme

@@ -1,0 +1,27 @@
+// Minimal "--key value" command-line parsing for the tools, with one-line errors.
+#pragma once
+
+#include <map>
+#include <set>
+#include <string>
+
+namespace mme {
+
+/// Parses argv into key -> value for "--key value" pairs and "--flag" switches. Throws
+/// InputError on an unknown option, a missing value or a repeated option.
+class CliArgs {
+ public:
+  CliArgs(int argc, char** argv, const std::set<std::string>& valued,
+          const std::set<std::string>& flags);
+  bool has(const std::string& key) const { return values_.count(key) != 0; }
+  std::string get(const std::string& key, const std::string& fallback = "") const;
+  /// Integer option in [min, max]; InputError naming the option otherwise.
+  long getInt(const std::string& key, long fallback, long min, long max) const;
+  /// Finite number option in [min, max]; InputError naming the option otherwise.
+  double getDouble(const std::string& key, double fallback, double min, double max) const;
+
+ private:
+  std::map<std::string, std::string> values_;
+};
+
+}  // namespace mme

@@ -1,0 +1,178 @@
+// identify: offline identification of a trajectory file or bag (SPEC section 7).
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <string>
+
+#include "cli_args.h"
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/io/model_yaml.h"
+#include "motion_model_estimation/io/trajectory_io.h"
+#include "motion_model_estimation/ros/bag_io.h"
+
+namespace {
+
+const char* kUsage =
+    "usage: identify --model M.yaml --trajectory FILE(.trc|.c3d|.bag) [--topic T] --out OUT.yaml\n"
+    "                [--method es] [--generations N] [--population P] [--window-frames W]\n"
+    "                [--first-frame F] [--frames N] [--seed S] [--threads T]\n"
+    "                [--compare-to-model] [--target-cost C] [--max-time-s S] [--quiet]\n";
+
+mme::Trajectory loadTrajectory(const std::string& path, const std::string& topic) {
+  if (mme::fileExtension(path) == ".bag") return mme::readBag(path, topic);
+  return mme::readTrajectoryFile(path);
+}
+
+/// Frames [first, first + count) of a trajectory.
+mme::Trajectory sliceFrames(const mme::Trajectory& in, int first, int count) {
+  mme::Trajectory out;
+  out.marker_names = in.marker_names;
+  out.frame_rate_hz = in.frame_rate_hz;
+  const int n = in.numMarkers();
+  out.times_s.assign(in.times_s.begin() + first, in.times_s.begin() + first + count);
+  out.frame_numbers.assign(in.frame_numbers.begin() + first,
+                           in.frame_numbers.begin() + first + count);
+  out.positions_m.assign(in.positions_m.begin() + first * n,
+                         in.positions_m.begin() + (first + count) * n);
+  out.occluded.assign(in.occluded.begin() + first * n, in.occluded.begin() + (first + count) * n);
+  return out;
+}
+
+int run(int argc, char** argv) {
+  mme::CliArgs args(argc, argv,
+                    {"model", "trajectory", "topic", "out", "method", "generations", "population",
+                     "window-frames", "first-frame", "frames", "seed", "threads", "target-cost",
+                     "max-time-s"},
+                    {"compare-to-model", "quiet", "help"});
+  if (args.has("help")) {
+    std::cout << kUsage;
+    return 0;
+  }
+  for (const char* required : {"model", "trajectory", "out"})
+    if (!args.has(required)) throw mme::InputError(std::string("--") + required + " is required");
+  const std::string method = args.get("method", "es");
+  if (method != "es") throw mme::InputError("--method '" + method + "' is unknown (available: es)");
+  const std::string model_path = args.get("model");
+  const std::string trajectory_path = args.get("trajectory");
+  const std::string out_path = args.get("out");
+
+  mme::IdentifyOptions options;
+  options.generations = static_cast<int>(args.getInt("generations", 1000, 1, 100000000));
+  options.es.population = static_cast<int>(args.getInt("population", 100, 2, 1000000));
+  options.es.offspring = options.es.population;
+  options.es.seed = static_cast<uint64_t>(args.getInt("seed", 1, 0, 0x7fffffffL));
+  options.es.threads = static_cast<int>(args.getInt("threads", 1, 1, 256));
+  options.target_cost = args.getDouble("target-cost", 0.0, 0.0, 1e300);
+  options.max_wall_time_s = args.getDouble("max-time-s", 0.0, 0.0, 1e9);
+  const bool compare = args.has("compare-to-model");
+  const bool quiet = args.has("quiet");
+
+  mme::Model model = mme::loadModelFile(model_path);
+  const mme::Model reference = model;
+  if (compare) {
+    // The file's values are the truth to compare with, not initial guesses.
+    for (const mme::ParamRef& ref : mme::freeParameters(model)) {
+      mme::Param& p = ref.bond_type >= 0 ? model.bond_types[ref.bond_type].params[ref.param]
+                                         : model.gravity_mps2[ref.param];
+      p.has_value = false;
+    }
+  }
+  mme::Trajectory data = loadTrajectory(trajectory_path, args.get("topic"));
+  if (data.numFrames() == 0) throw mme::InputError(trajectory_path + ": no frames");
+  std::vector<std::string> names;
+  for (const mme::Particle& p : model.particles) names.push_back(p.name);
+  std::vector<std::string> missing;
+  mme::Trajectory trajectory = mme::remapMarkers(data, names, &missing);
+  if (!missing.empty())
+    throw mme::InputError(trajectory_path + ": marker '" + missing[0] +
+                          "' of the model is not in the trajectory (" +
+                          std::to_string(missing.size()) + " missing)");
+  const int total = trajectory.numFrames();
+  const int first = static_cast<int>(args.getInt("first-frame", 0, 0, total - 1));
+  long count = args.getInt("frames", total - first, 1, total - first);
+  if (args.has("window-frames"))
+    count = std::min<long>(count, args.getInt("window-frames", count, 1, 100000000));
+  trajectory = sliceFrames(trajectory, first, static_cast<int>(count));
+  if (model.frame_rate_hz <= 0.0) model.frame_rate_hz = trajectory.frame_rate_hz;
+  if (!(model.frame_rate_hz > 0.0))
+    throw mme::InputError(trajectory_path + ": no frame rate in the data or the model");
+  if (trajectory.frame_rate_hz > 0 &&
+      std::abs(trajectory.frame_rate_hz - model.frame_rate_hz) > 1e-6 * model.frame_rate_hz)
+    std::fprintf(stderr, "identify: warning: data at %g Hz, model at %g Hz; using the model's\n",
+                 trajectory.frame_rate_hz, model.frame_rate_hz);
+
+  const bool tty = isatty(STDOUT_FILENO);
+  double last_print_s = -1.0;
+  auto progress = [&](const mme::Progress& p) {
+    if (quiet) return;
+    const bool last = p.generation == options.generations;
+    if (!last && p.wall_time_s - last_print_s < (tty ? 0.2 : 2.0)) return;
+    last_print_s = p.wall_time_s;
+    std::printf("%sgeneration %d/%d  evaluations %llu  cost %.6e  %.1f s%s", tty ? "\r" : "",
+                p.generation, options.generations,
+                static_cast<unsigned long long>(p.evaluations), p.best_cost, p.wall_time_s,
+                tty ? "   " : "\n");
+    std::fflush(stdout);
+  };
+  std::printf("identify: %d frames x %d markers at %g Hz, %zu free parameters, population %d\n",
+              trajectory.numFrames(), trajectory.numMarkers(), model.frame_rate_hz,
+              mme::freeParameters(model).size(), options.es.population);
+  const mme::IdentifyResult r = mme::identifyModel(model, trajectory, options, progress);
+  if (tty && !quiet) std::printf("\n");
+
+  std::printf("\n%-28s %16s %12s", "parameter", "value", "std");
+  if (compare) std::printf(" %16s %10s", "true", "error %");
+  std::printf("\n");
+  for (size_t k = 0; k < r.parameters.size(); ++k) {
+    std::printf("%-28s %16.9g %12.3g", r.parameters[k].name.c_str(), r.values[k], r.std_devs[k]);
+    if (compare) {
+      const mme::Param& p = r.parameters[k].bond_type >= 0
+                                ? reference.bond_types[r.parameters[k].bond_type]
+                                      .params[r.parameters[k].param]
+                                : reference.gravity_mps2[r.parameters[k].param];
+      if (p.has_value) {
+        const double err = p.value != 0.0 ? 100.0 * (r.values[k] - p.value) / std::abs(p.value)
+                                          : std::nan("");
+        std::printf(" %16.9g %10.4f", p.value, err);
+      } else {
+        std::printf(" %16s %10s", "-", "-");
+      }
+    }
+    std::printf("\n");
+  }
+  std::printf("global cost %.6e m^2 over %d frames, %d generations, %llu evaluations, %.2f s\n",
+              r.global_cost, r.frames, r.generations,
+              static_cast<unsigned long long>(r.evaluations), r.wall_time_s);
+
+  mme::IdentificationInfo info;
+  info.method = "es";
+  info.global_cost = r.global_cost;
+  info.frames = r.frames;
+  info.generations = r.generations;
+  info.wall_time_s = r.wall_time_s;
+  for (size_t k = 0; k < r.parameters.size(); ++k)
+    if (std::isfinite(r.std_devs[k])) {
+      info.std_names.push_back(r.parameters[k].name);
+      info.std_values.push_back(r.std_devs[k]);
+    }
+  mme::writeModelFile(out_path, r.model, &info);
+  std::printf("identify: wrote %s\n", out_path.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const mme::InputError& e) {
+    std::fprintf(stderr, "identify: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "identify: error: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,129 @@
+// Bag round trips of MarkerFrame and the errors of readBag (no master needed).
+#include <gtest/gtest.h>
+#include <rosbag/bag.h>
+#include <std_msgs/String.h>
+
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/trajectory.h"
+#include "motion_model_estimation/ros/bag_io.h"
+#include "motion_model_estimation/ros/conversions.h"
+
+namespace {
+
+std::string tempPath(const std::string& name) {
+  return (testing::TempDir().empty() ? std::string("/tmp/") : testing::TempDir()) + "mme_" + name;
+}
+
+mme::Trajectory makeTrajectory() {
+  mme::Trajectory t;
+  t.marker_names = {"a", "b", "c"};
+  t.frame_rate_hz = 120.0;
+  t.resize(25);
+  for (int f = 0; f < t.numFrames(); ++f)
+    for (int i = 0; i < 3; ++i) {
+      t.position(f, i) = Eigen::Vector3d(0.1 * i + 0.001 * f, -0.37 * f / 7.0, 1.0 / (1 + i + f));
+      t.occluded[f * 3 + i] = (f == 5 && i == 1) || (f == 11 && i == 2);
+      if (t.occluded[f * 3 + i]) t.position(f, i).setZero();
+    }
+  return t;
+}
+
+TEST(BagIo, RoundTripKeepsPositionsOcclusionNamesAndRate) {
+  const mme::Trajectory in = makeTrajectory();
+  const std::string path = tempPath("roundtrip.bag");
+  mme::writeBag(path, "markers", "world", in);
+  const mme::Trajectory out = mme::readBag(path, "");  // the only MarkerFrame topic
+  ASSERT_EQ(out.marker_names, in.marker_names);
+  ASSERT_EQ(out.numFrames(), in.numFrames());
+  EXPECT_DOUBLE_EQ(out.frame_rate_hz, 120.0);
+  for (int f = 0; f < in.numFrames(); ++f) {
+    EXPECT_EQ(out.frame_numbers[f], in.frame_numbers[f]);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_EQ(out.isOccluded(f, i), in.isOccluded(f, i)) << f << " " << i;
+      EXPECT_EQ(out.position(f, i), in.position(f, i)) << f << " " << i;  // bit exact doubles
+    }
+  }
+  // Times keep their spacing (an offset may be added to avoid a zero stamp).
+  EXPECT_NEAR(out.times_s[10] - out.times_s[0], 10.0 / 120.0, 1e-9);
+  std::remove(path.c_str());
+}
+
+TEST(BagIo, ExplicitTopicAndMissingTopic) {
+  const std::string path = tempPath("topic.bag");
+  mme::writeBag(path, "/mocap/markers", "world", makeTrajectory());
+  EXPECT_EQ(mme::readBag(path, "/mocap/markers").numFrames(), 25);
+  try {
+    mme::readBag(path, "/nothing_here");
+    FAIL() << "a missing topic must throw";
+  } catch (const mme::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("/nothing_here"), std::string::npos);
+  }
+  std::remove(path.c_str());
+}
+
+TEST(BagIo, WrongMessageTypeIsRefusedByName) {
+  const std::string path = tempPath("wrongtype.bag");
+  {
+    rosbag::Bag bag(path, rosbag::bagmode::Write);
+    std_msgs::String s;
+    s.data = "not markers";
+    bag.write("markers", ros::Time(1.0), s);
+  }
+  try {
+    mme::readBag(path, "markers");
+    FAIL() << "a topic of the wrong type must throw";
+  } catch (const mme::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("std_msgs/String"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(mme::readBag(path, ""), mme::InputError);  // no MarkerFrame topic at all
+  std::remove(path.c_str());
+}
+
+TEST(BagIo, NotABagAndMissingFileThrowNamingTheFile) {
+  const std::string path = tempPath("garbage.bag");
+  std::ofstream(path) << "this is not a rosbag\n";
+  try {
+    mme::readBag(path, "");
+    FAIL();
+  } catch (const mme::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos);
+  }
+  std::remove(path.c_str());
+  EXPECT_THROW(mme::readBag(tempPath("does_not_exist.bag"), ""), mme::InputError);
+}
+
+TEST(BagIo, UnwritablePathThrowsAndLeavesNothing) {
+  EXPECT_THROW(mme::writeBag("/nonexistent_dir_mme/x.bag", "markers", "world", makeTrajectory()),
+               mme::InputError);
+}
+
+TEST(Conversions, NaNIsOccludedAndMismatchedFramesAreRejected) {
+  mme::Trajectory t;
+  t.marker_names = {"a", "b"};
+  motion_model_estimation::MarkerFrame msg;
+  msg.names = {"a", "b"};
+  msg.positions.resize(2);
+  msg.positions[1].x = std::nan("");
+  EXPECT_EQ(mme::appendMarkerFrame(msg, &t), "");
+  ASSERT_EQ(t.occluded.size(), 2u);
+  EXPECT_EQ(t.occluded[0], 0);
+  EXPECT_EQ(t.occluded[1], 1);
+  EXPECT_TRUE(t.positions_m[1].allFinite());
+  msg.positions.resize(3);
+  EXPECT_NE(mme::appendMarkerFrame(msg, &t), "");
+  msg.positions.resize(2);
+  msg.names = {"a", "x"};
+  EXPECT_NE(mme::appendMarkerFrame(msg, &t), "");
+  msg.names = {"a", "b"};
+  msg.occluded = {true};
+  EXPECT_NE(mme::appendMarkerFrame(msg, &t), "");
+  EXPECT_EQ(t.numFrames(), 1);  // rejected frames leave the trajectory as it was
+  EXPECT_EQ(t.positions_m.size(), 2u);
+}
+
+}  // namespace
