@@ -127,7 +127,7 @@ std::vector<std::string> OnlineEstimator::particleNames() const {
 }
 
 double OnlineEstimator::frameRateHz() const {
-  std::lock_guard<std::mutex> lock(update_mutex_);
+  std::lock_guard<std::mutex> lock(model_mutex_);
   return model_.frame_rate_hz;
 }
 
@@ -154,7 +154,15 @@ bool OnlineEstimator::update() {
     if (static_cast<int>(times_s_.size()) < options_.min_frames) return false;
     window_data = snapshotLocked();
   }
-  Model model = model_;
+  Model model;
+  uint64_t version = 0;
+  {
+    std::lock_guard<std::mutex> model_lock(model_mutex_);
+    model = model_;
+    version = model_version_;
+  }
+  if (version != es_version_) es_.reset();  // reset() or replaceModel() since the last update
+  es_version_ = version;
   // Live streams carry their own clock: the model's rate wins only when it states one.
   if (!(model.frame_rate_hz > 0.0)) model.frame_rate_hz = window_data.frame_rate_hz;
   auto cost = std::make_shared<CostFunction>(model, window_data);
@@ -231,6 +239,9 @@ bool OnlineEstimator::update() {
         break;
       }
   }
+  // A reset() or replaceModel() during this update makes its result stale: drop it.
+  std::lock_guard<std::mutex> model_lock(model_mutex_);
+  if (model_version_ != version) return false;
   std::lock_guard<std::mutex> estimate_lock(estimate_mutex_);
   estimate_ = std::move(e);
   return true;
@@ -243,22 +254,21 @@ Estimate OnlineEstimator::estimate() const {
 
 Model OnlineEstimator::currentModel() const {
   Model model;
+  Estimate e;
   {
-    std::lock_guard<std::mutex> lock(update_mutex_);
+    std::lock_guard<std::mutex> lock(model_mutex_);  // the estimate belongs to this model
     model = model_;
+    e = estimate();
   }
-  const Estimate e = estimate();
   if (e.valid) setValues(model, freeParameters(model), e.values);
   return model;
 }
 
 void OnlineEstimator::reset(bool clear_window) {
   {
-    std::lock_guard<std::mutex> lock(update_mutex_);
-    es_.reset();
-  }
-  {
-    std::lock_guard<std::mutex> lock(estimate_mutex_);
+    std::lock_guard<std::mutex> lock(model_mutex_);
+    ++model_version_;  // the next update() starts a new population
+    std::lock_guard<std::mutex> estimate_lock(estimate_mutex_);
     estimate_ = Estimate();
   }
   if (clear_window) {
@@ -273,8 +283,8 @@ void OnlineEstimator::replaceModel(const Model& model) {
   checkModel(model);
   std::vector<std::string> names;
   for (const Particle& p : model.particles) names.push_back(p.name);
+  std::lock_guard<std::mutex> lock(model_mutex_);
   {
-    std::lock_guard<std::mutex> lock(update_mutex_);
     std::lock_guard<std::mutex> frames_lock(frames_mutex_);
     if (names != names_) {  // other markers: the window no longer fits
       times_s_.clear();
@@ -282,10 +292,10 @@ void OnlineEstimator::replaceModel(const Model& model) {
       occluded_.clear();
       names_ = names;
     }
-    model_ = model;
-    es_.reset();
   }
-  std::lock_guard<std::mutex> lock(estimate_mutex_);
+  model_ = model;
+  ++model_version_;  // the next update() starts a new population on this model
+  std::lock_guard<std::mutex> estimate_lock(estimate_mutex_);
   estimate_ = Estimate();
 }
 

@@ -4,7 +4,9 @@
 // rejecting every frame until the clock catches up.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
+#include <thread>
 #include <limits>
 
 #include "motion_model_estimation/core/error.h"
@@ -114,3 +116,40 @@ TEST_F(Fixture, ClockJumpStartsANewWindowAndKeepsTheModel) {
 }
 
 }  // namespace
+
+// The node's services and marker building read the model while a worker thread runs update()
+// back to back. They must not queue on the lock update() holds: std::mutex is not fair, so such
+// a reader starved for many seconds (the services rostest timed out that way). The readers use
+// the whole of each update's time for nothing but copies: 200 of them finish while the worker
+// has done only a few updates, and a reset or a model replacement takes effect at once.
+TEST_F(Fixture, ReadersAndResetsNeverWaitForARunningUpdate) {
+  mme::OnlineEstimatorOptions o = options();
+  o.generations_per_update = 200;  // long updates: a reader queued behind one would wait long
+  mme::OnlineEstimator e(model, o);
+  for (int t = 0; t < 50; ++t) ASSERT_EQ(e.addFrame(0.01 * t, frame(t), {}), "");
+  ASSERT_TRUE(e.update());  // one update, so later ones re-evaluate a living population
+  std::atomic<bool> stop{false};
+  std::atomic<int> updates{0};
+  std::thread worker([&] {
+    while (!stop) if (e.update()) ++updates;
+  });
+  while (updates == 0) std::this_thread::yield();  // the worker is in its loop
+  const int updates_before = updates;
+  for (int k = 0; k < 200; ++k) {
+    const mme::Model m = e.currentModel();
+    ASSERT_EQ(m.particles.size(), 3u);
+    EXPECT_GT(e.frameRateHz(), 0.0);
+  }
+  e.reset(false);
+  EXPECT_FALSE(e.estimate().valid) << "reset clears the estimate at once";
+  e.replaceModel(model);
+  const int updates_after = updates;
+  stop = true;
+  worker.join();
+  // Without the fix each currentModel() waited for at least one whole update (200 generations).
+  EXPECT_LT(updates_after - updates_before, 50)
+      << "200 model reads took " << (updates_after - updates_before) << " updates";
+  // After the replacement the population restarts: the next estimate starts from generation 0.
+  ASSERT_TRUE(e.update());
+  EXPECT_LE(e.estimate().generation, 200u);
+}

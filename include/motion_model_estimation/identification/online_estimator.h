@@ -95,11 +95,21 @@ class OnlineEstimator {
   std::deque<std::vector<uint8_t>> occluded_;
   InputCounters counters_;
 
-  mutable std::mutex update_mutex_;  // guards model_, options_, es_ (held through update())
+  std::vector<std::string> names_;  // guarded by frames_mutex_
+
+  // model_ and model_version_ are read and replaced under model_mutex_, held only for a copy, so
+  // services and marker building never wait for an update (std::mutex is not fair: a reader
+  // queued on a lock that update() holds back to back would starve). reset() and
+  // replaceModel() bump the version; update() drops its population when the version moved and
+  // discards a result computed for an older version.
+  mutable std::mutex model_mutex_;
   Model model_;
-  std::vector<std::string> names_;
-  OnlineEstimatorOptions options_;
+  uint64_t model_version_ = 0;
+
+  mutable std::mutex update_mutex_;  // guards es_ and es_version_ (held through update())
+  const OnlineEstimatorOptions options_;  // never changes after construction
   std::unique_ptr<EvolutionStrategy> es_;
+  uint64_t es_version_ = 0;  // the model_version_ es_ was built for
   mutable std::mutex estimate_mutex_;  // guards estimate_ (readers never wait for an update)
   Estimate estimate_;
 };
