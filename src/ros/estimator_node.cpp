@@ -156,7 +156,9 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
 
 EstimatorNode::~EstimatorNode() {
   stop_ = true;
+  markers_cv_.notify_all();
   if (worker_.joinable()) worker_.join();
+  if (markers_thread_.joinable()) markers_thread_.join();
   if (bag_thread_.joinable()) bag_thread_.join();
 }
 
@@ -167,6 +169,7 @@ void EstimatorNode::reject(const std::string& why) {
 }
 
 void EstimatorNode::onMarkerFrame(const motion_model_estimation::MarkerFrame::ConstPtr& msg) {
+  const auto arrival = std::chrono::steady_clock::now();
   if (msg->names.size() != msg->positions.size() ||
       (!msg->occluded.empty() && msg->occluded.size() != msg->positions.size())) {
     reject("names, positions and occluded differ in length");
@@ -179,10 +182,11 @@ void EstimatorNode::onMarkerFrame(const motion_model_estimation::MarkerFrame::Co
     occluded[i] = !msg->occluded.empty() && msg->occluded[i];
   }
   addObservation(msg->header.stamp, msg->header.frame_id, msg->names, std::move(x),
-                 std::move(occluded));
+                 std::move(occluded), arrival);
 }
 
 void EstimatorNode::onPointCloud(const sensor_msgs::PointCloud2::ConstPtr& msg) {
+  const auto arrival = std::chrono::steady_clock::now();
   const size_t n = static_cast<size_t>(msg->width) * msg->height;
   bool has_xyz = false;
   for (const auto& f : msg->fields) has_xyz = has_xyz || f.name == "x";
@@ -202,10 +206,12 @@ void EstimatorNode::onPointCloud(const sensor_msgs::PointCloud2::ConstPtr& msg) 
     reject(std::string("PointCloud2: ") + e.what());
     return;
   }
-  addObservation(msg->header.stamp, msg->header.frame_id, {}, std::move(x), std::move(occluded));
+  addObservation(msg->header.stamp, msg->header.frame_id, {}, std::move(x), std::move(occluded),
+                 arrival);
 }
 
 void EstimatorNode::onVicon(const topic_tools::ShapeShifter::ConstPtr& msg) {
+  const auto arrival = std::chrono::steady_clock::now();
   if (msg->getDataType() != names::kViconMarkersType) {
     reject("expected vicon_bridge/Markers, got " + msg->getDataType());
     return;
@@ -222,13 +228,15 @@ void EstimatorNode::onVicon(const topic_tools::ShapeShifter::ConstPtr& msg) {
   }
   ros::Time stamp;
   stamp.fromSec(m.stamp_s);
-  addObservation(stamp, m.frame_id, m.names, std::move(m.positions_m), std::move(m.occluded));
+  addObservation(stamp, m.frame_id, m.names, std::move(m.positions_m), std::move(m.occluded),
+                 arrival);
 }
 
 void EstimatorNode::addObservation(const ros::Time& stamp, const std::string& frame_id,
                                    const std::vector<std::string>& names,
                                    std::vector<Eigen::Vector3d> positions_m,
-                                   std::vector<uint8_t> occluded) {
+                                   std::vector<uint8_t> occluded,
+                                   std::chrono::steady_clock::time_point arrival) {
   // Bring the points into the fixed frame.
   if (!frame_id.empty() && frame_id != fixed_frame_) {
     geometry_msgs::TransformStamped tf;
@@ -300,6 +308,12 @@ void EstimatorNode::addObservation(const ros::Time& stamp, const std::string& fr
                       static_cast<unsigned long long>(clock_jumps_.load()));
   }
   last_frame_time_s_ = stamp.toSec();
+  {
+    std::lock_guard<std::mutex> lock(markers_mutex_);
+    ++frames_accepted_seq_;
+    newest_arrival_ = arrival;
+  }
+  markers_cv_.notify_one();
 }
 
 void EstimatorNode::onStatsTimer(const ros::WallTimerEvent&) {
@@ -310,6 +324,27 @@ void EstimatorNode::onStatsTimer(const ros::WallTimerEvent&) {
              " rejected_time=" + std::to_string(c.rejected_time) + " rejected_size=" +
              std::to_string(c.rejected_size) + " clock_jumps=" + std::to_string(clock_jumps_.load()) +
              " updates=" + std::to_string(updates_.load());
+  std::vector<double> latencies;
+  uint64_t markers_published = 0;
+  {
+    std::lock_guard<std::mutex> lock(markers_mutex_);
+    latencies.assign(latencies_ms_.begin(), latencies_ms_.end());
+    markers_published = markers_published_;
+  }
+  msg.data += " markers_published=" + std::to_string(markers_published);
+  if (!latencies.empty()) {
+    // Nearest-rank percentiles of the last 1024 frame -> ~markers latencies.
+    auto percentile = [&](double q) {
+      const size_t k = std::min(latencies.size() - 1,
+                                static_cast<size_t>(std::ceil(q * latencies.size())) - 1);
+      std::nth_element(latencies.begin(), latencies.begin() + k, latencies.end());
+      return latencies[k];
+    };
+    char text[96];
+    std::snprintf(text, sizeof(text), " latency_p50_ms=%.3f latency_p99_ms=%.3f", percentile(0.5),
+                  percentile(0.99));
+    msg.data += text;
+  }
   stats_pub_.publish(msg);
 }
 
@@ -351,7 +386,8 @@ void EstimatorNode::bagLoop() {
     ros::Time stamp;
     stamp.fromSec(bag.times_s[t]);
     const uint64_t before = updates_;
-    addObservation(stamp, "", bag.marker_names, std::move(x), std::move(occ));
+    addObservation(stamp, "", bag.marker_names, std::move(x), std::move(occ),
+                   std::chrono::steady_clock::now());
     if (options_.bag_rate == 0.0 && t + 1 >= options_.estimator.min_frames) {
       // As fast as the estimator keeps up: every window position gets one update.
       while (updates_ == before && !stop_ && ros::ok())
@@ -379,13 +415,52 @@ void EstimatorNode::onPublishTimer(const ros::WallTimerEvent&) {
     msg.stable = e.stable;
     estimate_pub_.publish(msg);
   }
-  if (options_.publish_markers && markers_pub_.getNumSubscribers() > 0) publishMarkers(e);
+  if (options_.publish_markers) {
+    {
+      std::lock_guard<std::mutex> lock(markers_mutex_);
+      markers_estimate_changed_ = true;
+    }
+    markers_cv_.notify_one();
+  }
 }
 
-void EstimatorNode::publishMarkers(const Estimate& e) {
+void EstimatorNode::markersLoop() {
+  while (!stop_ && ros::ok()) {
+    uint64_t seq = 0;
+    bool new_frame = false;
+    std::chrono::steady_clock::time_point arrival;
+    {
+      std::unique_lock<std::mutex> lock(markers_mutex_);
+      markers_cv_.wait_for(lock, std::chrono::milliseconds(100), [this] {
+        return stop_ || frames_accepted_seq_ != frames_rendered_seq_ || markers_estimate_changed_;
+      });
+      if (stop_) break;
+      new_frame = frames_accepted_seq_ != frames_rendered_seq_;
+      if (!new_frame && !markers_estimate_changed_) continue;
+      seq = frames_accepted_seq_;
+      arrival = newest_arrival_;
+      frames_rendered_seq_ = seq;
+      markers_estimate_changed_ = false;
+    }
+    if (!options_.publish_markers || markers_pub_.getNumSubscribers() == 0) continue;
+    const Estimate e = estimator_->estimate();
+    if (!e.valid) continue;
+    if (!publishMarkers(e)) continue;
+    if (!new_frame) continue;
+    const double latency_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - arrival)
+            .count();
+    std::lock_guard<std::mutex> lock(markers_mutex_);
+    ++markers_published_;
+    latencies_ms_.push_back(latency_ms);
+    if (latencies_ms_.size() > 1024) latencies_ms_.pop_front();
+  }
+}
+
+bool EstimatorNode::publishMarkers(const Estimate& e) {
   const Trajectory window = estimator_->window();
   const int frames = window.numFrames();
-  if (frames < 2) return;
+  if (frames < 2) return false;
   const Model model = estimator_->currentModel();
   const int n = window.numMarkers();
   MarkerScene scene;
@@ -444,6 +519,7 @@ void EstimatorNode::publishMarkers(const Estimate& e) {
                 e.global_cost, e.stable ? "stable" : "UNSTABLE");
   scene.text = text;
   markers_pub_.publish(buildMarkers(scene));
+  return true;
 }
 
 bool EstimatorNode::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
@@ -532,10 +608,13 @@ void EstimatorNode::run() {
   ros::AsyncSpinner spinner(2);  // callbacks and services never wait for identification
   spinner.start();
   worker_ = std::thread(&EstimatorNode::workerLoop, this);
+  markers_thread_ = std::thread(&EstimatorNode::markersLoop, this);
   if (!options_.bag.empty()) bag_thread_ = std::thread(&EstimatorNode::bagLoop, this);
   ros::waitForShutdown();
   stop_ = true;
+  markers_cv_.notify_all();
   worker_.join();
+  markers_thread_.join();
   if (bag_thread_.joinable()) bag_thread_.join();
   spinner.stop();
 }

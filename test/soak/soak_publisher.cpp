@@ -16,6 +16,8 @@
 //       estimate rate steady, writes the summary and exits 0 only when all hold.
 #include <ros/ros.h>
 #include <std_msgs/String.h>
+#include <unistd.h>
+#include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
 #include <atomic>
@@ -23,6 +25,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <mutex>
 #include <random>
@@ -56,6 +59,31 @@ long readRssKb(long pid) {
   return -1;  // process gone
 }
 
+/// utime + stime of a process in seconds (/proc/PID/stat), -1 when it is gone.
+double readCpuSeconds(long pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t close = text.rfind(')');  // the command name may hold spaces
+  if (close == std::string::npos) return -1.0;
+  std::istringstream fields(text.substr(close + 2));
+  std::string field;
+  double utime = 0, stime = 0;
+  for (int k = 3; k <= 15 && fields >> field; ++k) {  // fields 14 and 15: utime, stime
+    if (k == 14) utime = std::atof(field.c_str());
+    if (k == 15) stime = std::atof(field.c_str());
+  }
+  return (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
+
+/// "key=value" from the ~stats string as a double (NaN when absent).
+double statDouble(const std::string& stats, const std::string& key) {
+  const std::string k = key + "=";
+  size_t p = stats.find(k);
+  while (p != std::string::npos && p > 0 && stats[p - 1] != ' ') p = stats.find(k, p + 1);
+  return p == std::string::npos ? std::numeric_limits<double>::quiet_NaN()
+                                : std::atof(stats.c_str() + p + k.size());
+}
+
 /// "key=value" from the ~stats string (-1 when absent).
 long long statValue(const std::string& stats, const std::string& key) {
   const std::string k = key + "=";
@@ -68,6 +96,7 @@ struct Observed {
   std::mutex mutex;
   std::string stats;
   uint64_t estimates = 0;
+  uint64_t marker_arrays = 0;
   uint32_t generation = 0;
   double global_cost = std::numeric_limits<double>::quiet_NaN();
 };
@@ -108,6 +137,13 @@ int run(const Args& a) {
         obs.generation = m->generation;
         obs.global_cost = m->global_cost;
       });
+  // Subscribing to ~markers makes the node build them (it does no marker work otherwise): the
+  // latency from a frame's arrival to the markers built from it is measured that way.
+  ros::Subscriber markers_sub = nh.subscribe<visualization_msgs::MarkerArray>(
+      a.estimator + "/markers", 10, [&](const visualization_msgs::MarkerArray::ConstPtr&) {
+        std::lock_guard<std::mutex> lock(obs.mutex);
+        ++obs.marker_arrays;
+      });
   ros::AsyncSpinner spinner(1);
   spinner.start();
 
@@ -122,7 +158,7 @@ int run(const Args& a) {
 
   std::ofstream csv(a.csv);
   csv << "elapsed_s,rss_kb,published_valid,published_invalid,accepted,rejected,estimates,"
-         "generation,global_cost\n";
+         "generation,global_cost,cpu_percent,latency_p50_ms,latency_p99_ms,marker_arrays\n";
   std::mt19937_64 rng(a.seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::vector<std::string> names = clip.marker_names;
@@ -134,14 +170,20 @@ int run(const Args& a) {
   const auto start = std::chrono::steady_clock::now();
   const uint64_t total_frames = static_cast<uint64_t>(a.minutes * 60.0 * rate_hz);
   double next_sample_s = 0.0;
-  struct Sample { double t; long rss; uint64_t estimates; };
+  struct Sample { double t; long rss; uint64_t estimates; double cpu_percent, p50_ms, p99_ms; };
   std::vector<Sample> samples;
   motion_model_estimation::MarkerFrame last;
   bool alive = true;
 
+  double last_cpu_s = readCpuSeconds(a.estimator_pid), last_cpu_t = 0.0;
   auto sample = [&](double t) {
     const long rss = readRssKb(a.estimator_pid);
     if (rss < 0) alive = false;
+    const double cpu_s = readCpuSeconds(a.estimator_pid);
+    const double cpu_percent =
+        t > last_cpu_t ? 100.0 * (cpu_s - last_cpu_s) / (t - last_cpu_t) : 0.0;
+    last_cpu_s = cpu_s;
+    last_cpu_t = t;
     std::lock_guard<std::mutex> lock(obs.mutex);
     csv << std::fixed;
     csv.precision(1);
@@ -149,9 +191,14 @@ int run(const Args& a) {
         << statValue(obs.stats, "accepted") << ',' << statValue(obs.stats, "rejected") << ','
         << obs.estimates << ',' << obs.generation << ',';
     csv.precision(6);
-    csv << std::scientific << obs.global_cost << std::defaultfloat << '\n';
+    csv << std::scientific << obs.global_cost << std::defaultfloat;
+    const double p50 = statDouble(obs.stats, "latency_p50_ms");
+    const double p99 = statDouble(obs.stats, "latency_p99_ms");
+    csv.precision(3);
+    csv << std::fixed << ',' << cpu_percent << ',' << p50 << ',' << p99 << ','
+        << obs.marker_arrays << '\n';
     csv.flush();
-    samples.push_back({t, rss, obs.estimates});
+    samples.push_back({t, rss, obs.estimates, cpu_percent, p50, p99});
   };
 
   for (frame = 0; frame < total_frames && ros::ok() && alive; ++frame) {
@@ -279,6 +326,22 @@ int run(const Args& a) {
   const bool frames_ok = accepted == static_cast<long long>(valid);
   const bool rejects_ok = rejected == static_cast<long long>(invalid);
   const bool ok = alive && frames_ok && rejects_ok && rss_flat && rate_steady;
+  // CPU and latency after the warm-up (the first 5 s sample is the start-up).
+  double cpu_mean = 0, cpu_max = 0, p50_worst = 0, p99_worst = 0, p99_mean = 0;
+  int n_after = 0;
+  for (const Sample& s : samples)
+    if (s.t >= 10.0 && std::isfinite(s.p99_ms)) {
+      cpu_mean += s.cpu_percent;
+      cpu_max = std::max(cpu_max, s.cpu_percent);
+      p50_worst = std::max(p50_worst, s.p50_ms);
+      p99_worst = std::max(p99_worst, s.p99_ms);
+      p99_mean += s.p99_ms;
+      ++n_after;
+    }
+  if (n_after > 0) {
+    cpu_mean /= n_after;
+    p99_mean /= n_after;
+  }
 
   std::ostringstream s;
   s << "soak: " << run_s / 60.0 << " min at " << rate_hz << " Hz, " << n << " markers, "
@@ -293,7 +356,13 @@ int run(const Args& a) {
     << " kB at the end (growth after warm-up " << growth_kb << " kB"
     << (rss_flat ? ", flat)" : ", GROWING)") << "\n"
     << "estimates per minute (after the first): min " << rate_min << ", mean " << rate_mean
-    << ", max " << rate_max << (rate_steady ? " (steady)" : " (NOT steady)") << "\n";
+    << ", max " << rate_max << (rate_steady ? " (steady)" : " (NOT steady)") << " = "
+    << rate_mean / 60.0 << " Hz\n"
+    << "estimator_node CPU (utime + stime, % of one core, 5 s samples after 10 s): mean "
+    << cpu_mean << ", max " << cpu_max << "\n"
+    << "latency frame arrival -> ~markers built from it (last 1024 frames at each 5 s sample): "
+    << "p50 worst " << p50_worst << " ms, p99 mean " << p99_mean << " ms, p99 worst "
+    << p99_worst << " ms\n";
   {
     std::lock_guard<std::mutex> lock(obs.mutex);
     s << "last estimate: generation " << obs.generation << ", global cost " << obs.global_cost

@@ -11,6 +11,9 @@
 #include <topic_tools/shape_shifter.h>
 
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -62,14 +65,20 @@ class EstimatorNode {
   void onPointCloud(const sensor_msgs::PointCloud2::ConstPtr& msg);
   void onVicon(const topic_tools::ShapeShifter::ConstPtr& msg);
   /// Common path: names (empty = model order), transform, mask, add to the estimator.
+  /// `arrival`: when the frame's callback started (the latency benchmark's origin).
   void addObservation(const ros::Time& stamp, const std::string& frame_id,
                       const std::vector<std::string>& names,
-                      std::vector<Eigen::Vector3d> positions_m, std::vector<uint8_t> occluded);
+                      std::vector<Eigen::Vector3d> positions_m, std::vector<uint8_t> occluded,
+                      std::chrono::steady_clock::time_point arrival);
   void reject(const std::string& why);
   void workerLoop();
   void bagLoop();
   void onPublishTimer(const ros::WallTimerEvent&);
-  void publishMarkers(const Estimate& estimate);
+  /// ~markers thread: rebuilds the rviz markers as soon as a frame is accepted (latest frame
+  /// wins when several arrived meanwhile) and when the estimate changes; records the latency
+  /// from the frame's arrival to the publication of the markers built from it.
+  void markersLoop();
+  bool publishMarkers(const Estimate& estimate);  ///< false: nothing to show yet
   void onAutosaveTimer(const ros::WallTimerEvent&);
   void onStatsTimer(const ros::WallTimerEvent&);  ///< ~stats: input counters (std_msgs/String)
   std::string exportYaml(const Estimate& estimate) const;
@@ -90,7 +99,15 @@ class EstimatorNode {
   ros::ServiceServer reset_srv_, export_srv_, load_srv_;
   ros::WallTimer publish_timer_, autosave_timer_, stats_timer_;
   std::string autosave_target_;  // confined absolute path, "" = off
-  std::thread worker_, bag_thread_;
+  std::thread worker_, bag_thread_, markers_thread_;
+  // Marker thread hand-off (markersLoop): the newest accepted frame's arrival and a counter.
+  std::mutex markers_mutex_;
+  std::condition_variable markers_cv_;
+  uint64_t frames_accepted_seq_ = 0, frames_rendered_seq_ = 0;
+  bool markers_estimate_changed_ = false;
+  std::chrono::steady_clock::time_point newest_arrival_;
+  std::deque<double> latencies_ms_;  // the last 1024 arrival -> ~markers latencies
+  uint64_t markers_published_ = 0;
   std::atomic<bool> stop_{false};
   std::atomic<uint64_t> rejected_{0};
   std::atomic<uint64_t> updates_{0};
