@@ -11,3 +11,6 @@ set +u; source "$here/.ws/devel/setup.bash"; set -u
 if [ -z "${ROS_HOSTNAME:-}" ] && [ -z "${ROS_IP:-}" ] && ! getent hosts "$(uname -n)" >/dev/null 2>&1; then
   export ROS_HOSTNAME=localhost
 fi
+getent hosts localhost >/dev/null 2>&1 ||
+  echo "env.sh: warning: 'localhost' does not resolve (no /etc/hosts?): roslaunch, rostest and" \
+       "roscore will fail; add '127.0.0.1 localhost' to /etc/hosts" >&2
