@@ -2,7 +2,9 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <exception>
 
 #include "motion_model_estimation/core/error.h"
 
@@ -52,6 +54,18 @@ double CliArgs::getDouble(const std::string& key, double fallback, double min, d
     throw InputError("option --" + key + " must be a number in [" + std::to_string(min) + ", " +
                      std::to_string(max) + "], got '" + it->second + "'");
   return v;
+}
+
+int runTool(const char* tool, int (*run)(int, char**), int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "%s: %s\n", tool, e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: error: %s\n", tool, e.what());
+    return 1;
+  }
 }
 
 }  // namespace mme

@@ -24,4 +24,8 @@ class CliArgs {
   std::map<std::string, std::string> values_;
 };
 
+/// A tool's main(): runs `run` and turns exceptions into one line on stderr prefixed by the
+/// tool's name, exit code 2 for bad input (InputError), 1 for anything else.
+int runTool(const char* tool, int (*run)(int, char**), int argc, char** argv);
+
 }  // namespace mme

@@ -165,14 +165,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const mme::InputError& e) {
-    std::fprintf(stderr, "identify: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "identify: error: %s\n", e.what());
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return mme::runTool("identify", run, argc, argv); }
