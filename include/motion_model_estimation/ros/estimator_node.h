@@ -36,7 +36,7 @@ struct EstimatorNodeOptions {
   std::string bag_topic;               ///< MarkerFrame topic in the bag ("" = the only one)
   double bag_rate = 0.0;               ///< x real time; 0 = as fast as the estimator keeps up
   std::string fixed_frame;             ///< "" = the model's frame_id
-  double update_rate_hz = 10.0;        ///< ~estimate publication rate
+  double update_rate_hz = 20.0;        ///< [Hz] most ~estimate messages per second
   bool publish_markers = true;
   std::string color_bonds_by = "strain";  ///< strain | local_cost
   double particle_diameter_m = 0.02;
