@@ -48,10 +48,14 @@ set multiplot layout 2,3 title "success rate (all parameters within 1 %) per set
 set yrange [-0.05:1.05]
 set key top right font ",8"
 set ylabel "success rate"
+# Each curve reads only its own rows (through awk), so its points join into a line; the x tics
+# (the settings) come from es_local's rows, which exist for every setting.
+rows(axis, m) = sprintf("< awk -F, -v a='%s' -v m='%s' '$1 == a && $4 == m' '%s'", axis, m, rates)
 do for [axis in "noise omega_h occlusion spread unknowns conditional"] {
   set xlabel axis
   set xrange [-0.3:*]
-  plot for [k=1:7] rates using (strcol(1) eq axis && strcol(4) eq word(methods,k) ? $3 + (k-4)*0.02 : 1/0):7:xtic(2) \
+  plot rows(axis, "es_local") using 3:(1/0):xtic(2) notitle, \
+       for [k=1:7] rows(axis, word(methods,k)) using ($3 + (k-4)*0.02):7 \
        with linespoints ls k title word(methods,k)
 }
 unset multiplot
@@ -71,7 +75,8 @@ plot dir."/rollout.csv" using 4:xtic(1) title "stability-map runs", '' using 7 t
 set style data linespoints
 set xlabel "omega_max * h (explicit limit 2)"
 set xrange [-0.3:*]
-plot for [k=1:7] rates using (strcol(1) eq "omega_h" && strcol(4) eq word(methods,k) ? $3 + (k-4)*0.02 : 1/0):8:xtic(2) \
+plot rows("omega_h", "es_local") using 3:(1/0):xtic(2) notitle, \
+     for [k=1:7] rows("omega_h", word(methods,k)) using ($3 + (k-4)*0.02):8 \
      with linespoints ls k title word(methods,k)
 unset multiplot
 set xrange [*:*]; set yrange [*:*]
