@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
-# estimator_node refuses bad parameters: `rosrun motion_model_estimation estimator_node` exits
-# with code 2 and a message naming the parameter; with good parameters it runs. Needs a ROS
-# master: starts its own roscore on a free port and stops it by its PID.
+# estimator_node refuses bad parameters: the node exits with code 2 and a message naming the
+# parameter; with good parameters it runs. Needs a ROS master: starts its own roscore on a free
+# port and stops it by its PID. The binary is run by its devel-space path, not through rosrun:
+# the package directory is the repository, so rosrun's search also finds the copies in other
+# workspaces inside it (.ws/asan of `scripts/test --sanitize`) and asks which one to run.
 # MME_DEVEL=<catkin devel space> tests another workspace than the repository's .ws.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/../.." && pwd)
 export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH   # pyenv's python breaks the ROS CLIs
 devel=${MME_DEVEL:-$here/.ws/devel}
+node="$devel/lib/motion_model_estimation/estimator_node"
 # shellcheck disable=SC1091
 set +u; source "$devel/setup.bash"; set -u
 model="$here/config/models/paper_object.yaml"
@@ -26,7 +29,7 @@ expect_exit2() {  # expect_exit2 PATTERN ARGS... : exit code 2 and PATTERN in th
   local pattern=$1; shift
   n=$((n + 1))
   # A node name of its own per run: private params set by `_name:=` stay on the master.
-  set +e; timeout 30 rosrun motion_model_estimation estimator_node __name:="bad_$n" "$@" \
+  set +e; timeout 30 "$node" __name:="bad_$n" "$@" \
     >"$tmp/out" 2>&1; local rc=$?; set -e
   [ "$rc" -eq 2 ] || { echo "expected exit 2, got $rc for: $*"; cat "$tmp/out"; exit 1; }
   grep -q -- "$pattern" "$tmp/out" || { echo "missing '$pattern' in: $(cat "$tmp/out")"; exit 1; }
@@ -48,7 +51,7 @@ expect_exit2 "bad_model.yaml" _model:="$tmp/bad_model.yaml"
 # Good parameters: the node starts and keeps running until stopped (exit 124 from timeout;
 # SIGINT lets it shut down cleanly, line-buffered output keeps its start-up line).
 export ROSCONSOLE_STDOUT_LINE_BUFFERED=1
-set +e; timeout -s INT 8 rosrun motion_model_estimation estimator_node __name:=good _model:="$model" \
+set +e; timeout -s INT 8 "$node" __name:=good _model:="$model" \
   _window_frames:=100 _population:=60 >"$tmp/out" 2>&1; rc=$?; set -e
 [ "$rc" -eq 124 ] || { echo "good parameters: expected to run until stopped, exit $rc"; cat "$tmp/out"; exit 1; }
 grep -q "20 free parameters, window 100 frames, population 60" "$tmp/out" ||
