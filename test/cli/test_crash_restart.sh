@@ -112,7 +112,7 @@ kill -INT "$sim_pid"; wait "$sim_pid" 2>/dev/null || true
 first_run() {
   local name=$1; shift
   start_estimator "$tmp/$name.log" _update_rate_hz:=100.0 "$@"
-  for _ in $(seq 100); do rosservice list 2>/dev/null | grep -q /estimator/reset && break; sleep 0.2; done
+  for _ in $(seq 100); do grep -q /estimator/reset <<<"$(rosservice list 2>/dev/null || true)" && break; sleep 0.2; done
   rostopic echo -n 1 -p /estimator/estimate >"$tmp/$name.csv" 2>/dev/null &
   pids+=($!)
   for _ in $(seq 100); do

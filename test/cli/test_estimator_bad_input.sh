@@ -66,7 +66,7 @@ ln -s "$outside/elsewhere.yaml" "$models/link_file.yaml"  # a file symlink leadi
 "$bin/estimator_node" __name:=estimator _model:="$here/config/models/paper_object.yaml" \
   _model_dir:="$models" >"$tmp/estimator.log" 2>&1 &
 pids+=($!)
-for _ in $(seq 100); do rosservice list 2>/dev/null | grep -q /estimator/load_model && break; sleep 0.2; done
+for _ in $(seq 100); do grep -q /estimator/load_model <<<"$(rosservice list 2>/dev/null || true)" && break; sleep 0.2; done
 
 call() {  # call SERVICE PATH -> prints the response
   rosservice call "/estimator/$1" "path: '$2'" 2>&1
