@@ -75,21 +75,24 @@ double readCpuSeconds(long pid) {
   return (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
 }
 
-/// "key=value" from the ~stats string as a double (NaN when absent).
-double statDouble(const std::string& stats, const std::string& key) {
+/// Where the value of "key=value" starts in the ~stats string (nullptr when absent).
+const char* statField(const std::string& stats, const std::string& key) {
   const std::string k = key + "=";
   size_t p = stats.find(k);
   while (p != std::string::npos && p > 0 && stats[p - 1] != ' ') p = stats.find(k, p + 1);
-  return p == std::string::npos ? std::numeric_limits<double>::quiet_NaN()
-                                : std::atof(stats.c_str() + p + k.size());
+  return p == std::string::npos ? nullptr : stats.c_str() + p + k.size();
+}
+
+/// "key=value" from the ~stats string as a double (NaN when absent).
+double statDouble(const std::string& stats, const std::string& key) {
+  const char* v = statField(stats, key);
+  return v ? std::atof(v) : std::numeric_limits<double>::quiet_NaN();
 }
 
 /// "key=value" from the ~stats string (-1 when absent).
 long long statValue(const std::string& stats, const std::string& key) {
-  const std::string k = key + "=";
-  size_t p = stats.find(k);
-  while (p != std::string::npos && p > 0 && stats[p - 1] != ' ') p = stats.find(k, p + 1);
-  return p == std::string::npos ? -1 : std::atoll(stats.c_str() + p + k.size());
+  const char* v = statField(stats, key);
+  return v ? std::atoll(v) : -1;
 }
 
 struct Observed {
