@@ -394,15 +394,13 @@ RunResult runLls(const Problem& p, const Budget& budget) {
     r.errors.median = r.errors.max = std::numeric_limits<double>::quiet_NaN();
     return r;
   }
-  std::vector<double> genes(values.size());
+  std::vector<double> genes = p.space->toSearch(values);
   bool inside = true;
   for (size_t k = 0; k < values.size(); ++k) {
     const mme::Gene& g = p.space->gene(k);
-    if (g.log_scale && !(values[k] > 0.0)) {
+    if (!std::isfinite(genes[k])) {  // a log gene of a value <= 0
       inside = false;
       genes[k] = g.lower;
-    } else {
-      genes[k] = p.space->toSearch(k, values[k]);
     }
   }
   // One cost evaluation of the answer (LLS itself evaluates no cost); reported values are the

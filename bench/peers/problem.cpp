@@ -190,13 +190,14 @@ Starts::Starts(const Problem& problem, uint64_t seed) : problem_(problem), rando
 std::vector<double> Starts::next() {
   const mme::ParameterSpace& space = *problem_.space;
   std::vector<double> genes(space.size());
+  const std::vector<double> truth =
+      problem_.start_spread < 0.0 ? genes : space.toSearch(problem_.truth_values);
   for (size_t k = 0; k < space.size(); ++k) {
     if (problem_.start_spread < 0.0) {
       genes[k] = space.sampleInitial(k, random_);
     } else {
       const mme::Gene& g = space.gene(k);
-      const double truth = space.toSearch(k, problem_.truth_values[k]);
-      genes[k] = space.reflect(k, truth + problem_.start_spread * (g.upper - g.lower) * random_.normal());
+      genes[k] = space.reflect(k, truth[k] + problem_.start_spread * (g.upper - g.lower) * random_.normal());
     }
   }
   return genes;

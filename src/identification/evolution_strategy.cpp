@@ -29,8 +29,12 @@ std::string validateOptions(const EsOptions& o) {
     return "elite_fraction must be in [0, 1]";
   if (!(o.initial_mutability > 0.0 && o.initial_mutability <= 1.0))
     return "initial_mutability must be in (0, 1]";
-  if (o.refine_start_generation < 0 || o.refine_period < 0 || o.refine_max_evaluations < 0)
+  if (o.refine_start_generation < 0 || o.refine_period < 0 || o.refine_max_evaluations < 0 ||
+      o.refine_window_evaluations < 0)
     return "refinement settings must be >= 0";
+  if (!(o.refine_stall_factor == 0.0 || o.refine_stall_factor > 1.0) ||
+      !std::isfinite(o.refine_stall_factor))
+    return "refine_stall_factor must be 0 (one window) or > 1";
   if (o.refine_algorithm != "bobyqa" && o.refine_algorithm != "newuoa" &&
       o.refine_algorithm != "praxis")
     return "refine_algorithm must be bobyqa, newuoa or praxis";
@@ -81,6 +85,13 @@ std::vector<double> EvolutionStrategy::bestValues() const {
   return space_.toPhysical(best().genes);
 }
 
+double EvolutionStrategy::initialMutability(size_t k) const {
+  // A share of the range, but never more than the initial distribution's spread: a gene the
+  // data pin down (a rest length, a clamp length) is not first thrown across its range.
+  const Gene& g = space_.gene(k);
+  return std::min(options_.initial_mutability * (g.upper - g.lower), g.init_spread);
+}
+
 Individual EvolutionStrategy::makeRandom() {
   Individual ind;
   const size_t n = space_.size();
@@ -88,8 +99,7 @@ Individual EvolutionStrategy::makeRandom() {
   ind.mutability.resize(n);
   for (size_t k = 0; k < n; ++k) {
     ind.genes[k] = space_.sampleInitial(k, random_);
-    const Gene& g = space_.gene(k);
-    ind.mutability[k] = options_.initial_mutability * (g.upper - g.lower);
+    ind.mutability[k] = initialMutability(k);
   }
   return ind;
 }
@@ -197,8 +207,7 @@ Individual EvolutionStrategy::makeChild(Operator* op) {
       const int type = types[random_.index(static_cast<int>(types.size()))];
       for (int k : space_.genesOfType()[type]) {
         child.genes[k] = space_.sampleInitial(k, random_);
-        const Gene& g = space_.gene(k);
-        child.mutability[k] = options_.initial_mutability * (g.upper - g.lower);
+        child.mutability[k] = initialMutability(k);
       }
       return child;
     }
@@ -291,22 +300,40 @@ namespace {
 struct RefineContext {
   const CostFunction* cost;
   const ParameterSpace* space;
+  nlopt::opt* opt;
+  uint64_t window;             ///< evaluations over which progress is judged
+  double stall_factor;         ///< the best cost must shrink this much per window (0: no test)
   uint64_t calls = 0;
+  double best = std::numeric_limits<double>::infinity();
+  std::vector<double> best_after;  ///< best cost after each call
 };
 
 double refineObjective(const std::vector<double>& genes, std::vector<double>& /*grad*/,
                        void* data) {
   auto* ctx = static_cast<RefineContext*>(data);
   ++ctx->calls;
-  const double c = ctx->cost->evaluate(ctx->space->toPhysical(genes), nullptr);
-  return std::isfinite(c) ? c : 1e300;
+  double c = ctx->cost->evaluate(ctx->space->toPhysical(genes), nullptr);
+  if (!std::isfinite(c)) c = 1e300;
+  ctx->best = std::min(ctx->best, c);
+  ctx->best_after.push_back(ctx->best);
+  // Stalled: the last window did not divide the best cost by the factor (converged, at the
+  // round-off floor, or crawling). The window's start is the cost before it.
+  const uint64_t w = ctx->window;
+  if (ctx->calls >= w && ctx->calls % w == 0) {
+    const double window_start = ctx->calls == w ? ctx->best_after.front() : ctx->best_after[ctx->calls - w - 1];
+    if (!(ctx->stall_factor > 0.0) || !(ctx->best * ctx->stall_factor <= window_start))
+      ctx->opt->force_stop();
+  }
+  return c;
 }
 }  // namespace
 
 void EvolutionStrategy::refineBest() {
   // A Powell-family derivative-free local search from the best individual (the paper's
   // "variant of the Powell method"), inside the bounds; its result joins the population only
-  // when it improves the best.
+  // when it improves the best. One long run rather than fixed short ones: ill-conditioned
+  // costs (a stiff clamp next to a weak cubic term) need BOBYQA's quadratic model to mature,
+  // which a restart throws away; it stops when a window of evaluations no longer pays.
   const size_t n = space_.size();
   nlopt::algorithm algo = nlopt::LN_BOBYQA;
   if (options_.refine_algorithm == "newuoa") algo = nlopt::LN_NEWUOA_BOUND;
@@ -323,10 +350,15 @@ void EvolutionStrategy::refineBest() {
   opt.set_lower_bounds(lo);
   opt.set_upper_bounds(hi);
   opt.set_initial_step(step);
-  RefineContext ctx{cost_.get(), &space_};
+  const uint64_t window = options_.refine_window_evaluations > 0
+                              ? static_cast<uint64_t>(options_.refine_window_evaluations)
+                              : 30 * n + 100;
+  RefineContext ctx{cost_.get(), &space_, &opt, window, options_.refine_stall_factor};
+  ctx.best = start.cost;
+  ctx.best_after.reserve(window);
   opt.set_min_objective(refineObjective, &ctx);
   opt.set_maxeval(options_.refine_max_evaluations > 0 ? options_.refine_max_evaluations
-                                                      : static_cast<int>(30 * n + 100));
+                                                      : static_cast<int>(40 * window));
   opt.set_ftol_rel(1e-15);
   std::vector<double> x = start.genes;
   double fx = start.cost;

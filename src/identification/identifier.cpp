@@ -59,8 +59,8 @@ std::vector<double> estimateStdDevs(const CostFunction& cost, const ParameterSpa
   for (size_t k = 0; k < n; ++k) {
     if (!(inv(k, k) >= 0.0)) continue;
     const double gene_std = std::sqrt(2.0 * s2 * inv(k, k));
-    // Log genes: d(value) = value d(gene).
-    out[k] = space.gene(k).log_scale ? space.toPhysical(k, genes[k]) * gene_std : gene_std;
+    // Log genes: d(value) = value d(gene); a clamp-length gene: d(tau) = (1 + tau) d(gene).
+    out[k] = std::abs(space.physicalSlope(k, genes)) * gene_std;
   }
   return out;
 }

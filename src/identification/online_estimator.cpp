@@ -170,15 +170,19 @@ bool OnlineEstimator::update() {
   if (!es_) {
     es_ = std::make_unique<EvolutionStrategy>(ParameterSpace(model, window_data), options_.es);
     if (options_.resume_from_model_values) {
-      std::vector<double> genes;
+      std::vector<double> values;
       for (size_t k = 0; k < es_->space().size(); ++k) {
         const ParamRef& ref = es_->space().gene(k).ref;
         const Param& p = ref.bond_type >= 0 ? model.bond_types[ref.bond_type].params[ref.param]
                                             : model.gravity_mps2[ref.param];
         if (!p.has_value) break;
-        genes.push_back(es_->space().reflect(k, es_->space().toSearch(k, p.value)));
+        values.push_back(p.value);
       }
-      if (genes.size() == es_->space().size()) es_->setInitialGuess(genes, 1e-3);
+      if (values.size() == es_->space().size()) {
+        std::vector<double> genes = es_->space().toSearch(values);
+        for (size_t k = 0; k < genes.size(); ++k) genes[k] = es_->space().reflect(k, genes[k]);
+        es_->setInitialGuess(genes, 1e-3);
+      }
     }
   }
   es_->setCostFunction(cost);  // re-evaluates the living population on the new window
@@ -204,16 +208,15 @@ bool OnlineEstimator::update() {
   const size_t elite = std::max<size_t>(2, sorted.size() / 5);
   e.std_devs.assign(e.values.size(), std::numeric_limits<double>::quiet_NaN());
   if (sorted.size() >= 2) {
+    const size_t used = std::min(elite, sorted.size());
+    std::vector<std::vector<double>> values(used);
+    for (size_t j = 0; j < used; ++j) values[j] = es_->space().toPhysical(sorted[j]->genes);
     for (size_t k = 0; k < e.values.size(); ++k) {
       double mean = 0, sq = 0;
-      for (size_t j = 0; j < elite && j < sorted.size(); ++j)
-        mean += es_->space().toPhysical(k, sorted[j]->genes[k]);
-      mean /= std::min(elite, sorted.size());
-      for (size_t j = 0; j < elite && j < sorted.size(); ++j) {
-        const double d = es_->space().toPhysical(k, sorted[j]->genes[k]) - mean;
-        sq += d * d;
-      }
-      e.std_devs[k] = std::sqrt(sq / (std::min(elite, sorted.size()) - 1));
+      for (size_t j = 0; j < used; ++j) mean += values[j][k];
+      mean /= used;
+      for (size_t j = 0; j < used; ++j) sq += (values[j][k] - mean) * (values[j][k] - mean);
+      e.std_devs[k] = std::sqrt(sq / (used - 1));
     }
   }
   // Stability: a long rollout of the best model from the window start stays bounded (finite

@@ -16,6 +16,9 @@ bool isLengthLike(int param) {
 
 bool isPositivePhysical(int param) { return param != kRestAngle; }
 
+/// Initial std of a clamp-length gene (ln scale) around the longest observed bond.
+constexpr double kClampInitSpread = 1e-3;
+
 /// Average observed length of the bonds of a spring type over all frames where both ends are
 /// seen; 0 when there is none.
 double averageObservedLength(const Model& model, const Trajectory& trajectory, int type) {
@@ -31,6 +34,21 @@ double averageObservedLength(const Model& model, const Trajectory& trajectory, i
     }
   }
   return count > 0 ? sum / count : 0.0;
+}
+
+/// Longest observed length of the bonds of a spring type; 0 when none is seen.
+double maxObservedLength(const Model& model, const Trajectory& trajectory, int type) {
+  double longest = 0.0;
+  for (const Bond& bond : model.bonds) {
+    if (bond.type != type || model.bond_types[type].kind != BondKind::kSpring) continue;
+    const int a = bond.particles[0], b = bond.particles[1];
+    for (int t = 0; t < trajectory.numFrames(); ++t) {
+      if (trajectory.isOccluded(t, a) || trajectory.isOccluded(t, b)) continue;
+      const double l = (trajectory.position(t, b) - trajectory.position(t, a)).norm();
+      if (std::isfinite(l)) longest = std::max(longest, l);
+    }
+  }
+  return longest;
 }
 
 }  // namespace
@@ -94,6 +112,48 @@ ParameterSpace::ParameterSpace(const Model& model, const Trajectory& trajectory)
     genes_.push_back(g);
   }
 
+  // Provot's tau becomes a clamp length (see Gene::clamp_length). With tau as the coordinate
+  // the optimum is a needle: for tau above (longest observed / L - 1) the clamp is off and the
+  // cost flat, just below it the clamp shortens observed bonds; and that point moves with L.
+  for (size_t k = 0; k < genes_.size(); ++k) {
+    Gene& g = genes_[k];
+    if (g.ref.param != kMaxElongation || g.ref.bond_type < 0 || !g.log_scale) continue;
+    const int type = g.ref.bond_type;
+    const Param& rest = model.bond_types[type].params[kRestLength];
+    const Param& tau = model.bond_types[type].params[kMaxElongation];
+    double rest_lo, rest_hi, rest_guess;
+    int rest_gene = -1;
+    for (int j : genes_of_type_[type])
+      if (genes_[j].ref.param == kRestLength && genes_[j].log_scale) rest_gene = j;
+    if (rest_gene >= 0) {
+      rest_lo = std::exp(genes_[rest_gene].lower);
+      rest_hi = std::exp(genes_[rest_gene].upper);
+      rest_guess = std::exp(genes_[rest_gene].init_center);
+    } else if (rest.has_value && rest.value > 0.0 && !rest.free) {
+      rest_lo = rest_hi = rest_guess = rest.value;
+    } else {
+      continue;  // rest length free but not log-scaled: keep tau as it is
+    }
+    g.clamp_length = true;
+    g.rest_gene = rest_gene;
+    g.fixed_rest_length_m = rest_gene >= 0 ? 0.0 : rest_guess;
+    g.tau_lower = std::exp(g.lower);
+    g.tau_upper = std::exp(g.upper);
+    g.lower = std::log((1.0 + g.tau_lower) * rest_lo);
+    g.upper = std::log((1.0 + g.tau_upper) * rest_hi);
+    const double longest = maxObservedLength(model, trajectory, type);
+    if (tau.has_value && tau.value > 0.0) {
+      g.init_center = std::log((1.0 + tau.value) * rest_guess);
+      g.init_spread = (g.upper - g.lower) / 6.0;
+    } else if (longest > 0.0) {
+      // Like rest lengths from the average observed distance: the clamp where the longest
+      // observed bond of the type is (exactly right when the clamp acted in the data).
+      g.init_center = std::log(longest);
+      g.init_spread = kClampInitSpread;
+    }
+    g.init_center = std::min(std::max(g.init_center, g.lower), g.upper);
+  }
+
   // Sites of each type.
   std::vector<std::set<int>> sites(num_types + 1);
   for (const Bond& bond : model.bonds) {
@@ -118,19 +178,49 @@ std::vector<ParamRef> ParameterSpace::refs() const {
   return out;
 }
 
-double ParameterSpace::toPhysical(size_t k, double gene_value) const {
-  return genes_[k].log_scale ? std::exp(gene_value) : gene_value;
-}
-
-double ParameterSpace::toSearch(size_t k, double physical_value) const {
-  if (k >= genes_.size()) return physical_value;
-  return genes_[k].log_scale ? std::log(physical_value) : physical_value;
+double ParameterSpace::restLength(const Gene& g, const std::vector<double>& physical) const {
+  return g.rest_gene >= 0 ? physical[g.rest_gene] : g.fixed_rest_length_m;
 }
 
 std::vector<double> ParameterSpace::toPhysical(const std::vector<double>& genes) const {
+  if (genes.size() != genes_.size())
+    throw InputError("ParameterSpace::toPhysical: " + std::to_string(genes.size()) +
+                     " genes, expected " + std::to_string(genes_.size()));
   std::vector<double> out(genes.size());
-  for (size_t k = 0; k < genes.size(); ++k) out[k] = toPhysical(k, genes[k]);
+  for (size_t k = 0; k < genes.size(); ++k)
+    out[k] = genes_[k].log_scale ? std::exp(genes[k]) : genes[k];
+  for (size_t k = 0; k < genes.size(); ++k) {
+    const Gene& g = genes_[k];
+    if (!g.clamp_length) continue;
+    // tau = clamp length / L - 1, inside tau's own bounds (a clamp shorter than the rest
+    // length would be no spring).
+    const double tau = out[k] / restLength(g, out) - 1.0;
+    out[k] = std::isfinite(tau) ? std::min(std::max(tau, g.tau_lower), g.tau_upper) : g.tau_lower;
+  }
   return out;
+}
+
+std::vector<double> ParameterSpace::toSearch(const std::vector<double>& physical) const {
+  if (physical.size() != genes_.size())
+    throw InputError("ParameterSpace::toSearch: " + std::to_string(physical.size()) +
+                     " values, expected " + std::to_string(genes_.size()));
+  std::vector<double> out(physical.size());
+  for (size_t k = 0; k < physical.size(); ++k) {
+    const Gene& g = genes_[k];
+    const double v = g.clamp_length ? (1.0 + physical[k]) * restLength(g, physical) : physical[k];
+    out[k] = g.log_scale ? std::log(v) : v;
+  }
+  return out;
+}
+
+double ParameterSpace::physicalSlope(size_t k, const std::vector<double>& genes) const {
+  const Gene& g = genes_[k];
+  if (!g.log_scale) return 1.0;
+  if (!g.clamp_length) return std::exp(genes[k]);
+  // tau = exp(gene) / L - 1: d tau / d gene = exp(gene) / L (0 where tau is at a bound).
+  const std::vector<double> physical = toPhysical(genes);
+  if (physical[k] <= g.tau_lower || physical[k] >= g.tau_upper) return 0.0;
+  return 1.0 + physical[k];
 }
 
 double ParameterSpace::reflect(size_t k, double v) const {

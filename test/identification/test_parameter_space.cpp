@@ -59,10 +59,9 @@ TEST(ParameterSpace, GenesScalesAndBounds) {
   EXPECT_FALSE(space.gene(2).log_scale);  // an angle may be anything in [0, pi]
   EXPECT_DOUBLE_EQ(space.gene(2).upper, M_PI);
   EXPECT_FALSE(space.gene(3).log_scale);  // gravity has a sign
-  for (size_t k = 0; k < space.size(); ++k) {
-    const double x = k == 3 ? -9.0 : 0.37;
-    EXPECT_NEAR(space.toPhysical(k, space.toSearch(k, x)), x, 1e-15);
-  }
+  const std::vector<double> x{0.37, 0.37, 0.37, -9.0};
+  const std::vector<double> back = space.toPhysical(space.toSearch(x));
+  for (size_t k = 0; k < space.size(); ++k) EXPECT_NEAR(back[k], x[k], 1e-15);
 }
 
 TEST(ParameterSpace, RestLengthStartsAtTheAverageObservedDistance) {
@@ -110,6 +109,42 @@ TEST(ParameterSpace, GenesAndSitesPerType) {
   EXPECT_EQ(space.sitesOfType()[0], (std::vector<int>{0, 1, 2}));
   EXPECT_EQ(space.sitesOfType()[1], (std::vector<int>{1, 2, 3}));
   EXPECT_EQ(space.typesWithGenes(), (std::vector<int>{0, 1, 2}));
+}
+
+TEST(ParameterSpace, MaxElongationIsSearchedAsAClampLengthAtTheLongestObservedBond) {
+  mme::Model m = twoTypeModel();
+  m.bond_types[0].param(mme::kMaxElongation) = {0.0, true, false, true};  // free, no value
+  const mme::Trajectory t = dataOf(m);
+  mme::ParameterSpace space(m, t);
+  ASSERT_EQ(space.size(), 5u);  // a/stiffness, a/rest_length, a/max_elongation, b/..., gravity
+  const mme::Gene& tau = space.gene(2);
+  ASSERT_EQ(tau.ref.name, "a/max_elongation");
+  EXPECT_TRUE(tau.clamp_length);
+  EXPECT_EQ(tau.rest_gene, 1);
+  double longest = 0;
+  for (int f = 0; f < 3; ++f)
+    longest = std::max({longest, (t.position(f, 1) - t.position(f, 0)).norm(),
+                        (t.position(f, 2) - t.position(f, 1)).norm()});
+  EXPECT_NEAR(std::exp(tau.init_center), longest, 1e-12);
+
+  // The gene is ln((1 + tau) L): moving the rest length moves tau, not the clamp length.
+  std::vector<double> genes{std::log(10.0), std::log(0.1), std::log(0.13), 2.0, -9.81};
+  std::vector<double> v = space.toPhysical(genes);
+  EXPECT_NEAR(v[1], 0.1, 1e-15);
+  EXPECT_NEAR(v[2], 0.3, 1e-12);
+  genes[1] = std::log(0.104);
+  v = space.toPhysical(genes);
+  EXPECT_NEAR((1.0 + v[2]) * v[1], 0.13, 1e-12);
+  // Round trip, and d tau / d gene = 1 + tau (checked by a difference quotient).
+  const std::vector<double> back = space.toSearch(v);
+  for (size_t k = 0; k < genes.size(); ++k) EXPECT_NEAR(back[k], genes[k], 1e-12);
+  std::vector<double> moved = genes;
+  moved[2] += 1e-7;
+  EXPECT_NEAR(space.physicalSlope(2, genes), (space.toPhysical(moved)[2] - v[2]) / 1e-7, 1e-6);
+  // A clamp shorter than the rest length is tau's lower bound, not a negative tau.
+  genes[2] = std::log(0.05);
+  EXPECT_DOUBLE_EQ(space.toPhysical(genes)[2], tau.tau_lower);
+  EXPECT_DOUBLE_EQ(space.physicalSlope(2, genes), 0.0);
 }
 
 }  // namespace

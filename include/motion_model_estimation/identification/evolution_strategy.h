@@ -34,7 +34,11 @@ struct EsOptions {
   double initial_mutability = 0.05;  ///< initial mutation std as a share of each gene's range
   int refine_start_generation = 400;  ///< first generation with a Powell-family refinement
   int refine_period = 100;            ///< generations between refinements (0 = never)
-  int refine_max_evaluations = 0;     ///< per refinement; 0 = 30 x genes + 100
+  /// A refinement stops when its last refine_window_evaluations evaluations (0 = 30 x genes
+  /// + 100) did not divide the best cost by refine_stall_factor (0: after one window)...
+  int refine_window_evaluations = 0;
+  double refine_stall_factor = 1.01;
+  int refine_max_evaluations = 0;     ///< ...or after this many (0 = 40 windows)
   std::string refine_algorithm = "bobyqa";  ///< bobyqa | newuoa | praxis
 };
 
@@ -90,6 +94,7 @@ class EvolutionStrategy {
   void evaluate(std::vector<Individual>* individuals);
 
  private:
+  double initialMutability(size_t k) const;
   Individual makeChild(Operator* op);
   void mutateGenes(Individual* child, const std::vector<int>& genes);
   void select(std::vector<Individual>* children, const std::vector<Operator>& ops);

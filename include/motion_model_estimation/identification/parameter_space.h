@@ -20,6 +20,14 @@ struct Gene {
   double init_center = 0.0;   ///< centre of the initial distribution (search space)
   double init_spread = 1.0;   ///< std of the initial distribution (search space)
   bool has_initial = false;   ///< the model file gave a value (initial guess)
+  /// max_elongation (Provot's tau) is searched as the clamp length ln((1 + tau) L), with L the
+  /// same type's rest length: the clamp acts where that length meets the longest observed bond,
+  /// a point that does not move when L does. Physical tau = exp(gene) / L - 1.
+  bool clamp_length = false;
+  int rest_gene = -1;               ///< gene of the type's rest length (-1: L is fixed)
+  double fixed_rest_length_m = 0.0; ///< L when the rest length is not free
+  double tau_lower = 0.0;           ///< physical bounds of tau (clamp_length genes only)
+  double tau_upper = 0.0;
 };
 
 /// Maps genes <-> physical parameter values. Built from a model (free flags, bounds, initial
@@ -35,9 +43,14 @@ class ParameterSpace {
   /// The free parameters in CostFunction order.
   std::vector<ParamRef> refs() const;
 
-  double toPhysical(size_t k, double gene_value) const;
-  double toSearch(size_t k, double physical_value) const;
+  /// Genes -> physical values in CostFunction order (a clamp-length gene needs its type's rest
+  /// length, so the conversion works on whole vectors).
   std::vector<double> toPhysical(const std::vector<double>& genes) const;
+  /// Physical values -> genes (inverse of toPhysical inside the bounds; not reflected).
+  std::vector<double> toSearch(const std::vector<double>& physical) const;
+  /// d(physical value k) / d(gene k) at `genes`, other genes held: turns a gene's standard
+  /// deviation into the parameter's.
+  double physicalSlope(size_t k, const std::vector<double>& genes) const;
   /// Clamps a gene into its bounds by reflection (keeps the search distribution symmetric).
   double reflect(size_t k, double gene_value) const;
   /// Draws gene k from the paper's initialisation (rest lengths around the average observed
@@ -53,6 +66,8 @@ class ParameterSpace {
   const std::vector<int>& typesWithGenes() const { return types_with_genes_; }
 
  private:
+  double restLength(const Gene& g, const std::vector<double>& physical) const;
+
   std::vector<Gene> genes_;
   std::vector<std::vector<int>> genes_of_type_;
   std::vector<std::vector<int>> sites_of_type_;
