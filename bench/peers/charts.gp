@@ -4,7 +4,7 @@
 set terminal pngcairo size 1200,800 noenhanced font ",10"
 set datafile separator ","
 set datafile missing "n/a"
-methods = "es_local es_global cmaes sade bobyqa lm lls"
+methods = "es_local es_global cmaes sade bobyqa lm lls es_early"
 set style line 1 lc rgb "#1f77b4" lw 2 pt 7
 set style line 2 lc rgb "#aec7e8" lw 2 pt 7
 set style line 3 lc rgb "#d62728" lw 2 pt 5
@@ -12,6 +12,7 @@ set style line 4 lc rgb "#ff9896" lw 2 pt 5
 set style line 5 lc rgb "#2ca02c" lw 2 pt 9
 set style line 6 lc rgb "#9467bd" lw 2 pt 11
 set style line 7 lc rgb "#000000" lw 2 pt 13 ps 2
+set style line 8 lc rgb "#ff7f0e" lw 2 dt 2 pt 7
 floor_err = 1e-7
 clip(x) = (x < floor_err ? floor_err : x)
 
@@ -30,10 +31,14 @@ do for [scene in scenes] {
     set xlabel "cost evaluations"; set ylabel errname." parameter error [%]"
     plot for [k=1:6] trace using (strcol(1) eq scene && strcol(2) eq word(methods,k) && $3==1 ? $4 : 1/0):(clip(column(col+0))) \
            with steps ls k title word(methods,k), \
+         trace using (strcol(1) eq scene && strcol(2) eq "es_early" && $3==1 ? $4 : 1/0):(clip(column(col+0))) \
+           with steps ls 8 title "es_early", \
          runs using (strcol(1) eq scene && strcol(2) eq "lls" && $3==1 ? 1 : 1/0):(clip(column(rcol))) with points ls 7 title "lls"
     set xlabel "wall time [s]"
     plot for [k=1:6] trace using (strcol(1) eq scene && strcol(2) eq word(methods,k) && $3==1 ? $5 : 1/0):(clip(column(col+0))) \
            with steps ls k title word(methods,k), \
+         trace using (strcol(1) eq scene && strcol(2) eq "es_early" && $3==1 ? $5 : 1/0):(clip(column(col+0))) \
+           with steps ls 8 title "es_early", \
          runs using (strcol(1) eq scene && strcol(2) eq "lls" && $3==1 ? ($7 > 1e-5 ? $7 : 1e-5) : 1/0):(clip(column(rcol))) with points ls 7 title "lls"
   }
   unset multiplot

@@ -26,7 +26,7 @@
 namespace bench {
 
 std::vector<std::string> allMethods() {
-  return {"es_local", "es_global", "cmaes", "sade", "bobyqa", "lm", "lls"};
+  return {"es_local", "es_early", "es_global", "cmaes", "sade", "bobyqa", "lm", "lls"};
 }
 
 bool methodAvailable(const std::string& method) {
@@ -160,12 +160,21 @@ class Tracker {
 };
 
 // ---------------------------------------------------------------- the engine (two variants)
-RunResult runEs(const Problem& p, uint64_t seed, const Budget& budget, bool keep_trace, bool local) {
+RunResult runEs(const Problem& p, uint64_t seed, const Budget& budget, bool keep_trace, bool local,
+                bool early_refinement) {
   RunResult r;
   Tracker tracker(p, budget, keep_trace);
   mme::EsOptions o;  // default options
   o.seed = seed;
   o.threads = 1;
+  // A refinement runs while it pays, possibly for many windows: keep it inside the budget.
+  o.refine_total_evaluation_cap = budget.max_evaluations;
+  if (early_refinement) {
+    // The engine with another refinement schedule (a setting, not a code change): BOBYQA from
+    // generation 10, every 10, instead of the paper's 400 / 100.
+    o.refine_start_generation = kEarlyRefineGeneration;
+    o.refine_period = kEarlyRefineGeneration;
+  }
   if (!local) {
     // Ablation through the options only (the engine is unchanged): the local-cost operators
     // (partial replica chosen by local cost, local-cost-biased crossover) get no children;
@@ -176,6 +185,9 @@ RunResult runEs(const Problem& p, uint64_t seed, const Budget& budget, bool keep
   }
   mme::EvolutionStrategy es(*p.space, o);
   es.setCostFunction(p.cost);
+  es.setDeadline(std::chrono::steady_clock::now() +
+                 std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                     std::chrono::duration<double>(budget.max_wall_s)));
   if (p.start_spread >= 0.0) {
     // The initial population = the first `population` starts of the spread rule.
     Starts starts(p, seed);
@@ -544,8 +556,9 @@ bool solveEquationError(const Problem& p, std::vector<double>* values, std::stri
 RunResult runMethod(const std::string& method, const Problem& problem, uint64_t seed,
                     const Budget& budget, bool keep_trace) {
   RunResult r;
-  if (method == "es_local") r = runEs(problem, seed, budget, keep_trace, true);
-  else if (method == "es_global") r = runEs(problem, seed, budget, keep_trace, false);
+  if (method == "es_local") r = runEs(problem, seed, budget, keep_trace, true, false);
+  else if (method == "es_early") r = runEs(problem, seed, budget, keep_trace, true, true);
+  else if (method == "es_global") r = runEs(problem, seed, budget, keep_trace, false, false);
   else if (method == "bobyqa") r = runBobyqa(problem, seed, budget, keep_trace);
   else if (method == "lls") r = runLls(problem, budget);
 #ifdef MME_HAVE_PAGMO

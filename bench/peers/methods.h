@@ -2,6 +2,8 @@
 // space, random starts) and judged the same way: the best-cost point found so far is the
 // method's answer; its parameter errors against the truth are recorded along the run.
 //   es_local   the paper's ES with local costs (mme::EvolutionStrategy, default options)
+//   es_early   the same engine with its refinement from generation 10, every 10 (the paper:
+//              from 400, every 100); run in the speed-accuracy part only
 //   es_global  the same engine with the local-cost operators switched off through its options
 //              (share_partial_replica = share_crossover = 0, their share given to share_replica)
 //   cmaes      pagmo2 CMA-ES (restarts from the next starts when it stops or stalls)
@@ -19,6 +21,9 @@
 #include "problem.h"
 
 namespace bench {
+
+/// es_early's refinement schedule: first refinement and period [generations].
+constexpr int kEarlyRefineGeneration = 10;
 
 struct Budget {
   uint64_t max_evaluations = 100000;  ///< cost evaluations (full-cost equivalents)

@@ -106,23 +106,18 @@ Individual EvolutionStrategy::makeRandom() {
 
 void EvolutionStrategy::evaluate(std::vector<Individual>* individuals) {
   if (!cost_) throw std::logic_error("EvolutionStrategy: no cost function set");
-  auto work = [this, individuals](size_t first, size_t stride) {
-    for (size_t i = first; i < individuals->size(); i += stride) {
-      Individual& ind = (*individuals)[i];
-      ind.cost = cost_->evaluate(space_.toPhysical(ind.genes), &ind.local_costs);
-      if (!std::isfinite(ind.cost)) ind.cost = std::numeric_limits<double>::infinity();
-    }
+  // Each individual's cost depends only on its genes, so which thread evaluates it cannot
+  // change the result: determinism holds for any thread count.
+  auto work = [this, individuals](size_t i) {
+    Individual& ind = (*individuals)[i];
+    ind.cost = cost_->evaluate(space_.toPhysical(ind.genes), &ind.local_costs);
+    if (!std::isfinite(ind.cost)) ind.cost = std::numeric_limits<double>::infinity();
   };
-  // Each individual's cost depends only on its genes, so the split over threads cannot change
-  // the result: determinism holds for any thread count.
-  const size_t threads = std::min<size_t>(options_.threads, individuals->size());
-  if (threads <= 1) {
-    work(0, 1);
+  if (options_.threads > 1 && !pool_) pool_ = std::make_unique<ThreadPool>(options_.threads);
+  if (pool_) {
+    pool_->parallelFor(individuals->size(), work);
   } else {
-    std::vector<std::thread> pool;
-    for (size_t t = 1; t < threads; ++t) pool.emplace_back(work, t, threads);
-    work(0, threads);
-    for (std::thread& th : pool) th.join();
+    for (size_t i = 0; i < individuals->size(); ++i) work(i);
   }
   evaluations_ += individuals->size();
 }
@@ -301,6 +296,7 @@ struct RefineContext {
   const CostFunction* cost;
   const ParameterSpace* space;
   nlopt::opt* opt;
+  std::chrono::steady_clock::time_point deadline;
   uint64_t window;             ///< evaluations over which progress is judged
   double stall_factor;         ///< the best cost must shrink this much per window (0: no test)
   uint64_t calls = 0;
@@ -318,6 +314,7 @@ double refineObjective(const std::vector<double>& genes, std::vector<double>& /*
   ctx->best_after.push_back(ctx->best);
   // Stalled: the last window did not divide the best cost by the factor (converged, at the
   // round-off floor, or crawling). The window's start is the cost before it.
+  if (std::chrono::steady_clock::now() > ctx->deadline) ctx->opt->force_stop();
   const uint64_t w = ctx->window;
   if (ctx->calls >= w && ctx->calls % w == 0) {
     const double window_start = ctx->calls == w ? ctx->best_after.front() : ctx->best_after[ctx->calls - w - 1];
@@ -353,12 +350,21 @@ void EvolutionStrategy::refineBest() {
   const uint64_t window = options_.refine_window_evaluations > 0
                               ? static_cast<uint64_t>(options_.refine_window_evaluations)
                               : 30 * n + 100;
-  RefineContext ctx{cost_.get(), &space_, &opt, window, options_.refine_stall_factor};
+  RefineContext ctx{cost_.get(), &space_, &opt, deadline_, window, options_.refine_stall_factor};
   ctx.best = start.cost;
   ctx.best_after.reserve(window);
   opt.set_min_objective(refineObjective, &ctx);
-  opt.set_maxeval(options_.refine_max_evaluations > 0 ? options_.refine_max_evaluations
-                                                      : static_cast<int>(40 * window));
+  uint64_t max_evaluations = options_.refine_max_evaluations > 0
+                                 ? static_cast<uint64_t>(options_.refine_max_evaluations)
+                                 : 40 * window;
+  if (options_.refine_total_evaluation_cap > 0) {
+    // +1: the refined point's re-evaluation below.
+    const uint64_t left = options_.refine_total_evaluation_cap > evaluations_ + 1
+                              ? options_.refine_total_evaluation_cap - evaluations_ - 1 : 0;
+    if (left < 2 * n + 2) return;  // BOBYQA needs 2n+1 points before it moves
+    max_evaluations = std::min(max_evaluations, left);
+  }
+  opt.set_maxeval(static_cast<int>(std::min<uint64_t>(max_evaluations, 1u << 30)));
   opt.set_ftol_rel(1e-15);
   std::vector<double> x = start.genes;
   double fx = start.cost;

@@ -77,6 +77,9 @@ IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
   ParameterSpace space(model, trajectory);
   EvolutionStrategy es(space, options.es);
   es.setCostFunction(cost);
+  if (options.max_wall_time_s > 0.0)
+    es.setDeadline(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                               std::chrono::duration<double>(options.max_wall_time_s)));
   auto elapsed = [&start]() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };

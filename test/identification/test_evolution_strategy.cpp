@@ -2,6 +2,7 @@
 // crossover, determinism across runs and thread counts, warm start on a new window.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <memory>
 
@@ -88,6 +89,33 @@ TEST(EvolutionStrategy, IdentifiesProvotClothFromItsSingleEquilibriumFrame) {
   const std::vector<double> truth = mme::getValues(scene.model, mme::freeParameters(scene.model));
   ASSERT_EQ(r.values.size(), 20u);
   EXPECT_LT(maxRelativeError(r.values, truth), 0.005) << "cost " << r.global_cost;
+}
+
+// A refinement may run for many windows; an evaluation cap or a deadline keeps it inside a
+// caller's budget.
+TEST(EvolutionStrategy, RefinementStaysInsideTheEvaluationCapAndTheDeadline) {
+  Fixture f;
+  auto evaluationsAfterRefinement = [&f](uint64_t cap, bool past_deadline) {
+    mme::EsOptions options;
+    options.population = 20;
+    options.offspring = 20;
+    options.refine_start_generation = 2;
+    options.refine_period = 100;
+    options.refine_total_evaluation_cap = cap;
+    mme::EvolutionStrategy es(mme::ParameterSpace(f.search, f.data), options);
+    es.setCostFunction(f.cost);
+    if (past_deadline) es.setDeadline(std::chrono::steady_clock::now());
+    es.step();
+    es.step();  // generation 2: 20 initial + 2 x 20 children, then the refinement
+    return es.evaluations();
+  };
+  const uint64_t free_run = evaluationsAfterRefinement(0, false);
+  const uint64_t capped = evaluationsAfterRefinement(200, false);
+  EXPECT_GT(free_run, 200u);
+  EXPECT_LE(capped, 200u);
+  EXPECT_GT(capped, 60u);  // it did refine, up to the cap
+  // Past its deadline a refinement stops at its first evaluation (+1 to re-evaluate the point).
+  EXPECT_LE(evaluationsAfterRefinement(0, true), 62u);
 }
 
 TEST(EvolutionStrategy, OperatorsKeepEveryGeneInsideItsBounds) {

@@ -4,6 +4,7 @@
 // cost function can be swapped for a newer window while the population lives on (warm start).
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -12,6 +13,7 @@
 
 #include "motion_model_estimation/core/cost.h"
 #include "motion_model_estimation/core/random.h"
+#include "motion_model_estimation/core/thread_pool.h"
 #include "motion_model_estimation/identification/parameter_space.h"
 
 namespace mme {
@@ -39,6 +41,9 @@ struct EsOptions {
   int refine_window_evaluations = 0;
   double refine_stall_factor = 1.01;
   int refine_max_evaluations = 0;     ///< ...or after this many (0 = 40 windows)
+  /// Evaluations a refinement may bring the run's total to (0 = no limit): lets a caller with
+  /// an evaluation budget keep a long refinement inside it.
+  uint64_t refine_total_evaluation_cap = 0;
   std::string refine_algorithm = "bobyqa";  ///< bobyqa | newuoa | praxis
 };
 
@@ -72,6 +77,8 @@ class EvolutionStrategy {
   /// Replaces the population (evaluated individuals: cost and local costs set), e.g. to resume
   /// from a saved model; also used by tests to set up operator situations.
   void setPopulation(std::vector<Individual> population);
+  /// A refinement running past this time stops there (keeping its best point); default: none.
+  void setDeadline(std::chrono::steady_clock::time_point deadline) { deadline_ = deadline; }
 
   const Individual& best() const;
   std::vector<double> bestValues() const;  ///< physical values of the best individual
@@ -113,6 +120,8 @@ class EvolutionStrategy {
   std::vector<uint64_t> operator_successes_;
   std::vector<double> initial_guess_;
   double initial_guess_spread_ = 0.0;
+  std::unique_ptr<ThreadPool> pool_;
+  std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();  ///< options_.threads - 1 workers (none for 1 thread)
 };
 
 }  // namespace mme

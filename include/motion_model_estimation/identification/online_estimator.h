@@ -19,6 +19,15 @@
 
 namespace mme {
 
+/// The engine's defaults, except that a refinement is one window of evaluations (30 x genes +
+/// 100): an update must stay short, the data move on while it runs, and the next refinement
+/// starts from the newer window anyway.
+inline EsOptions onlineEsDefaults() {
+  EsOptions o;
+  o.refine_stall_factor = 0.0;
+  return o;
+}
+
 struct OnlineEstimatorOptions {
   int window_frames = 100;          ///< frames in the sliding window
   int min_frames = 10;              ///< frames needed before the first update
@@ -27,7 +36,7 @@ struct OnlineEstimatorOptions {
   /// Start the population at the model's values of the free parameters when all have one
   /// (resuming an autosaved model) instead of the paper's random initialisation.
   bool resume_from_model_values = false;
-  EsOptions es;                     ///< population, seed, threads, operators
+  EsOptions es = onlineEsDefaults();  ///< population, seed, threads, operators
 };
 
 std::string validateOptions(const OnlineEstimatorOptions& options);
