@@ -358,6 +358,13 @@ void stabilityMap(const Settings& s, const std::vector<std::string>& methods) {
 }
 
 // ====================================================================== (d) scaling
+double median(std::vector<double> v) {
+  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
 void scaling(const Settings& s) {
   std::vector<std::pair<int, int>> sizes = {{2, 5}, {10, 10}, {25, 40}, {100, 100}};
   if (s.quick) sizes = {{2, 5}, {10, 10}};
@@ -379,26 +386,34 @@ void scaling(const Settings& s) {
       ++evals;
     }
     const double per_eval = since(t0) / evals;
-    const int generations = per_eval > 5e-3 ? 2 : per_eval > 5e-4 ? 5 : 20;
-    double t1 = 0.0;
+    // The same generations (same seed: the same children, whatever the thread count) timed
+    // with 1 and 2 threads in alternation, several times; the median of each is kept. One
+    // timing of each on a shared 2-core machine swings by tens of percent.
+    const int generations = std::max(3, static_cast<int>(0.3 / (100 * per_eval)));
+    const int repeats = s.quick ? 1 : 5;
+    std::map<int, std::vector<double>> per_gen_s;
+    for (int rep = 0; rep < repeats; ++rep)
+      for (int threads : {1, 2}) {
+        mme::EsOptions o;
+        o.seed = 1;
+        o.threads = threads;
+        mme::EvolutionStrategy es(space, o);
+        es.setCostFunction(cost);
+        es.step();  // initial population + first generation (not timed)
+        t0 = Clock::now();
+        for (int g = 0; g < generations; ++g) es.step();
+        per_gen_s[threads].push_back(since(t0) / generations);
+      }
+    const double t1 = median(per_gen_s[1]);
     for (int threads : {1, 2}) {
-      mme::EsOptions o;
-      o.seed = 1;
-      o.threads = threads;
-      mme::EvolutionStrategy es(space, o);
-      es.setCostFunction(cost);
-      es.step();  // initial population + first generation (not timed)
-      t0 = Clock::now();
-      for (int g = 0; g < generations; ++g) es.step();
-      const double per_gen = since(t0) / generations;
-      if (threads == 1) t1 = per_gen;
+      const double per_gen = median(per_gen_s[threads]);
       const double eff = t1 / (threads * per_gen);
       std::fprintf(f, "%zu,%zu,%zu,%d,%d,%.6g,%.6g,%.4f,%s\n", truth.particles.size(), truth.bonds.size(),
                    space.size(), frames, threads, per_gen, per_eval, eff, loadAverage().c_str());
       std::fflush(f);
-      say("(d) %6zu particles %6zu bonds, %d thread(s): %.4g s per generation (%.3g s per evaluation), "
-          "efficiency %.0f %%\n", truth.particles.size(), truth.bonds.size(), threads, per_gen, per_eval,
-          100.0 * eff);
+      say("(d) %6zu particles %6zu bonds, %d thread(s): %.4g s per generation (median of %d x %d "
+          "generations; %.3g s per evaluation), efficiency %.0f %%\n", truth.particles.size(),
+          truth.bonds.size(), threads, per_gen, repeats, generations, per_eval, 100.0 * eff);
     }
   }
   std::fclose(f);
@@ -434,13 +449,6 @@ double toD(const Row& r, const std::string& key) {
   auto it = r.find(key);
   if (it == r.end() || it->second == "n/a" || it->second.empty()) return NAN;
   return std::atof(it->second.c_str());
-}
-
-double median(std::vector<double> v) {
-  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
 }
 
 /// One sentence per method: why it fails where it fails (from the mechanisms; the settings where

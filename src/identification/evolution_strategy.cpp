@@ -92,89 +92,109 @@ double EvolutionStrategy::initialMutability(size_t k) const {
   return std::min(options_.initial_mutability * (g.upper - g.lower), g.init_spread);
 }
 
-Individual EvolutionStrategy::makeRandom() {
+Individual EvolutionStrategy::makeRandom(FastRandom& rng) const {
   Individual ind;
   const size_t n = space_.size();
   ind.genes.resize(n);
   ind.mutability.resize(n);
   for (size_t k = 0; k < n; ++k) {
-    ind.genes[k] = space_.sampleInitial(k, random_);
+    ind.genes[k] = space_.sampleInitial(k, rng);
     ind.mutability[k] = initialMutability(k);
   }
   return ind;
+}
+
+void EvolutionStrategy::forEach(size_t count, const std::function<void(size_t)>& body) {
+  if (options_.threads > 1 && !pool_) pool_ = std::make_unique<ThreadPool>(options_.threads);
+  if (pool_) {
+    pool_->parallelFor(count, body);
+  } else {
+    for (size_t i = 0; i < count; ++i) body(i);
+  }
+}
+
+void EvolutionStrategy::evaluateOne(Individual* ind) const {
+  ind->cost = cost_->evaluate(space_.toPhysical(ind->genes), &ind->local_costs);
+  if (!std::isfinite(ind->cost)) ind->cost = std::numeric_limits<double>::infinity();
 }
 
 void EvolutionStrategy::evaluate(std::vector<Individual>* individuals) {
   if (!cost_) throw std::logic_error("EvolutionStrategy: no cost function set");
   // Each individual's cost depends only on its genes, so which thread evaluates it cannot
   // change the result: determinism holds for any thread count.
-  auto work = [this, individuals](size_t i) {
-    Individual& ind = (*individuals)[i];
-    ind.cost = cost_->evaluate(space_.toPhysical(ind.genes), &ind.local_costs);
-    if (!std::isfinite(ind.cost)) ind.cost = std::numeric_limits<double>::infinity();
-  };
-  if (options_.threads > 1 && !pool_) pool_ = std::make_unique<ThreadPool>(options_.threads);
-  if (pool_) {
-    pool_->parallelFor(individuals->size(), work);
-  } else {
-    for (size_t i = 0; i < individuals->size(); ++i) work(i);
-  }
+  forEach(individuals->size(), [this, individuals](size_t i) { evaluateOne(&(*individuals)[i]); });
   evaluations_ += individuals->size();
 }
 
-int EvolutionStrategy::chooseParent(const std::vector<int>& sites) {
+int EvolutionStrategy::chooseParent(const std::vector<int>& sites, FastRandom& rng) const {
   auto score = [&](int i) {
     if (sites.empty()) return population_[i].cost;
     double s = 0.0;
     for (int p : sites) s += population_[i].local_costs[p];
     return s;
   };
-  int best = random_.index(static_cast<int>(population_.size()));
+  const int size = static_cast<int>(population_.size());
+  int best = rng.index(size);
   double best_score = score(best);
   for (int k = 1; k < options_.tournament_size; ++k) {
-    const int c = random_.index(static_cast<int>(population_.size()));
+    const int c = rng.index(size);
     const double s = score(c);
     if (s < best_score) { best = c; best_score = s; }
   }
   return best;
 }
 
-void EvolutionStrategy::mutateGenes(Individual* child, const std::vector<int>& genes) {
+int EvolutionStrategy::chooseParentAt(int site, FastRandom& rng) const {
+  // chooseParent({site}) without building a vector: the crossover calls it once per site.
+  const int size = static_cast<int>(population_.size());
+  int best = rng.index(size);
+  double best_score = population_[best].local_costs[site];
+  for (int k = 1; k < options_.tournament_size; ++k) {
+    const int c = rng.index(size);
+    const double s = population_[c].local_costs[site];
+    if (s < best_score) { best = c; best_score = s; }
+  }
+  return best;
+}
+
+void EvolutionStrategy::mutateGenes(Individual* child, const std::vector<int>& genes,
+                                    FastRandom& rng) const {
   // Self-adaptation (Schwefel): the mutability moves log-normally, then the gene moves with it;
   // mutabilities that produced good children survive with them.
   const double n = static_cast<double>(genes.size());
   const double tau_global = 1.0 / std::sqrt(2.0 * n);
   const double tau_local = 1.0 / std::sqrt(2.0 * std::sqrt(n));
-  const double common = tau_global * random_.normal();
+  const double common = tau_global * rng.normal();
   for (int k : genes) {
     const Gene& g = space_.gene(k);
     const double range = g.upper - g.lower;
-    double sigma = child->mutability[k] * std::exp(common + tau_local * random_.normal());
+    double sigma = child->mutability[k] * std::exp(common + tau_local * rng.normal());
     sigma = std::min(std::max(sigma, 1e-15 * range), 0.5 * range);
     child->mutability[k] = sigma;
-    child->genes[k] = space_.reflect(k, child->genes[k] + sigma * random_.normal());
+    child->genes[k] = space_.reflect(k, child->genes[k] + sigma * rng.normal());
   }
 }
 
-Individual EvolutionStrategy::crossover() {
+Individual EvolutionStrategy::crossover(FastRandom& rng) const {
   // Per bond type: one parent per site (particle at an extremity of a bond of that type), each
   // chosen with a bias toward a good local cost at that site; the type's genes become the mean
   // of the chosen parents' genes.
-  Individual child = population_[chooseParent({})];
+  Individual child = population_[chooseParent({}, rng)];
+  std::vector<double> sum, sum_mut;
   for (int type : space_.typesWithGenes()) {
     const std::vector<int>& genes = space_.genesOfType()[type];
     const std::vector<int>& sites = space_.sitesOfType()[type];
-    std::vector<double> sum(genes.size(), 0.0), sum_mut(genes.size(), 0.0);
-    int parents = 0;
+    if (sites.empty()) continue;
+    sum.assign(genes.size(), 0.0);
+    sum_mut.assign(genes.size(), 0.0);
     for (int site : sites) {
-      const Individual& parent = population_[chooseParent({site})];
+      const Individual& parent = population_[chooseParentAt(site, rng)];
       for (size_t j = 0; j < genes.size(); ++j) {
         sum[j] += parent.genes[genes[j]];
         sum_mut[j] += parent.mutability[genes[j]];
       }
-      ++parents;
     }
-    if (parents == 0) continue;
+    const double parents = static_cast<double>(sites.size());
     for (size_t j = 0; j < genes.size(); ++j) {
       child.genes[genes[j]] = sum[j] / parents;
       child.mutability[genes[j]] = sum_mut[j] / parents;
@@ -183,47 +203,47 @@ Individual EvolutionStrategy::crossover() {
   return child;
 }
 
-Individual EvolutionStrategy::makeChild(Operator* op) {
+Individual EvolutionStrategy::makeChild(Operator* op, FastRandom& rng) const {
   const double shares[] = {options_.share_new, options_.share_partly_new, options_.share_replica,
                            options_.share_partial_replica, options_.share_crossover};
   const double total = std::accumulate(std::begin(shares), std::end(shares), 0.0);
-  double r = random_.uniform() * total;
+  double r = rng.uniform() * total;
   int pick = 0;
   while (pick < 4 && r >= shares[pick]) r -= shares[pick++];
   const std::vector<int>& types = space_.typesWithGenes();
   switch (pick) {
     case 0: {
       *op = Operator::kNew;
-      return makeRandom();
+      return makeRandom(rng);
     }
     case 1: {  // partly new: one bond type's genes redrawn from the initial distribution
       *op = Operator::kPartlyNew;
-      Individual child = population_[chooseParent({})];
-      const int type = types[random_.index(static_cast<int>(types.size()))];
+      Individual child = population_[chooseParent({}, rng)];
+      const int type = types[rng.index(static_cast<int>(types.size()))];
       for (int k : space_.genesOfType()[type]) {
-        child.genes[k] = space_.sampleInitial(k, random_);
+        child.genes[k] = space_.sampleInitial(k, rng);
         child.mutability[k] = initialMutability(k);
       }
       return child;
     }
     case 2: {  // replica of a globally good individual, every gene mutated
       *op = Operator::kReplica;
-      Individual child = population_[chooseParent({})];
+      Individual child = population_[chooseParent({}, rng)];
       std::vector<int> all(space_.size());
       std::iota(all.begin(), all.end(), 0);
-      mutateGenes(&child, all);
+      mutateGenes(&child, all, rng);
       return child;
     }
     case 3: {  // partial replica: one bond type mutated, parent good at that type's sites
       *op = Operator::kPartialReplica;
-      const int type = types[random_.index(static_cast<int>(types.size()))];
-      Individual child = population_[chooseParent(space_.sitesOfType()[type])];
-      mutateGenes(&child, space_.genesOfType()[type]);
+      const int type = types[rng.index(static_cast<int>(types.size()))];
+      Individual child = population_[chooseParent(space_.sitesOfType()[type], rng)];
+      mutateGenes(&child, space_.genesOfType()[type], rng);
       return child;
     }
     default: {
       *op = Operator::kCrossover;
-      return crossover();
+      return crossover(rng);
     }
   }
 }
@@ -399,16 +419,20 @@ void EvolutionStrategy::step() {
     std::vector<Individual> none;
     select(&none, {});
   }
-  std::vector<Individual> children;
-  std::vector<Operator> ops;
-  children.reserve(options_.offspring);
-  for (int c = 0; c < options_.offspring; ++c) {
-    Operator op;
-    children.push_back(makeChild(&op));
-    ops.push_back(op);
-    ++operator_counts_[static_cast<int>(op)];
-  }
-  evaluate(&children);
+  // Each child has its own stream (seeds drawn in order from the strategy's), so making and
+  // evaluating children on any number of threads gives the same children.
+  const size_t count = static_cast<size_t>(options_.offspring);
+  std::vector<uint64_t> seeds(count);
+  for (uint64_t& seed : seeds) seed = random_.next();
+  std::vector<Individual> children(count);
+  std::vector<Operator> ops(count);
+  forEach(count, [&](size_t c) {
+    FastRandom rng(seeds[c]);
+    children[c] = makeChild(&ops[c], rng);
+    evaluateOne(&children[c]);
+  });
+  evaluations_ += count;
+  for (Operator op : ops) ++operator_counts_[static_cast<int>(op)];
   select(&children, ops);
   ++generation_;
   if (options_.refine_period > 0 && generation_ >= options_.refine_start_generation &&

@@ -233,9 +233,4 @@ double ParameterSpace::reflect(size_t k, double v) const {
   return r <= w ? lo + r : hi - (r - w);
 }
 
-double ParameterSpace::sampleInitial(size_t k, Random& random) const {
-  const Gene& g = genes_[k];
-  return reflect(k, g.init_center + g.init_spread * random.normal());
-}
-
 }  // namespace mme

@@ -1,4 +1,4 @@
-// A seeded random generator with platform-independent distributions (the std:: distributions'
+// Seeded random generators with platform-independent distributions (the std:: distributions'
 // output is implementation-defined, which would break "same seed, same result" across builds).
 #pragma once
 
@@ -8,9 +8,40 @@
 
 namespace mme {
 
-class Random {
+/// xoshiro256** (Blackman and Vigna), its state filled by splitmix64 from one seed: cheap to
+/// seed, so each child of a generation can have its own stream.
+class Xoshiro256 {
  public:
-  explicit Random(uint64_t seed) : engine_(seed) {}
+  explicit Xoshiro256(uint64_t seed) {
+    for (uint64_t& word : s_) {
+      seed += 0x9e3779b97f4a7c15ULL;
+      uint64_t z = seed;
+      z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+      z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+      word = z ^ (z >> 31);
+    }
+  }
+  uint64_t operator()() {
+    const uint64_t result = rotl(s_[1] * 5, 7) * 9;
+    const uint64_t t = s_[1] << 17;
+    s_[2] ^= s_[0];
+    s_[3] ^= s_[1];
+    s_[1] ^= s_[2];
+    s_[0] ^= s_[3];
+    s_[2] ^= t;
+    s_[3] = rotl(s_[3], 45);
+    return result;
+  }
+
+ private:
+  static uint64_t rotl(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+  uint64_t s_[4];
+};
+
+template <class Engine>
+class BasicRandom {
+ public:
+  explicit BasicRandom(uint64_t seed) : engine_(seed) {}
   /// Uniform in [0, 1).
   double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
   /// Uniform integer in [0, n) (n > 0); the slight modulo bias is irrelevant here.
@@ -24,7 +55,12 @@ class Random {
   uint64_t next() { return engine_(); }
 
  private:
-  std::mt19937_64 engine_;
+  Engine engine_;
 };
+
+/// The scenes' and data generators' stream (Mersenne Twister: their outputs are fixed by it).
+using Random = BasicRandom<std::mt19937_64>;
+/// The evolution strategy's per-child streams.
+using FastRandom = BasicRandom<Xoshiro256>;
 
 }  // namespace mme

@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -92,18 +93,26 @@ class EvolutionStrategy {
   /// Children of each operator that entered the population (survived selection).
   const std::vector<uint64_t>& operatorSuccesses() const { return operator_successes_; }
 
-  // Building blocks, public for tests.
-  Individual makeRandom();
-  Individual crossover();
+  // Building blocks, public for tests (these draw from the strategy's own stream).
+  Individual makeRandom() { return makeRandom(random_); }
+  Individual crossover() { return crossover(random_); }
   /// Index of a parent chosen by tournament on the sum of local costs at `sites`
   /// (all particles when empty = global cost).
-  int chooseParent(const std::vector<int>& sites);
+  int chooseParent(const std::vector<int>& sites) { return chooseParent(sites, random_); }
   void evaluate(std::vector<Individual>* individuals);
 
  private:
+  // The operators only read the population: one generation's children are made (each from its
+  // own stream, seeded from the strategy's) and evaluated in parallel.
+  Individual makeRandom(FastRandom& rng) const;
+  Individual crossover(FastRandom& rng) const;
+  int chooseParent(const std::vector<int>& sites, FastRandom& rng) const;
+  int chooseParentAt(int site, FastRandom& rng) const;
   double initialMutability(size_t k) const;
-  Individual makeChild(Operator* op);
-  void mutateGenes(Individual* child, const std::vector<int>& genes);
+  Individual makeChild(Operator* op, FastRandom& rng) const;
+  void mutateGenes(Individual* child, const std::vector<int>& genes, FastRandom& rng) const;
+  void evaluateOne(Individual* individual) const;
+  void forEach(size_t count, const std::function<void(size_t)>& body);
   void select(std::vector<Individual>* children, const std::vector<Operator>& ops);
   void refineBest();
   void initialise();
@@ -111,7 +120,7 @@ class EvolutionStrategy {
   ParameterSpace space_;
   EsOptions options_;
   std::shared_ptr<const CostFunction> cost_;
-  Random random_;
+  FastRandom random_;
   std::vector<Individual> population_;
   int best_index_ = 0;
   int generation_ = 0;

@@ -55,7 +55,10 @@ class ParameterSpace {
   double reflect(size_t k, double gene_value) const;
   /// Draws gene k from the paper's initialisation (rest lengths around the average observed
   /// distance of the bonds of that type, others log-Gaussian), inside the bounds.
-  double sampleInitial(size_t k, Random& random) const;
+  template <class R>
+  double sampleInitial(size_t k, R& random) const {
+    return reflect(k, genes_[k].init_center + genes_[k].init_spread * random.normal());
+  }
 
   /// Genes of each bond type (index = bond type; empty for types without free parameters).
   const std::vector<std::vector<int>>& genesOfType() const { return genes_of_type_; }
