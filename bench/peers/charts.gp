@@ -91,12 +91,14 @@ set output dir."/scaling.png"
 set multiplot layout 1,2 title "(d) es_local: time per generation (100 children) on spring sheets, 10 frames"
 set logscale xy
 set xlabel "particles"; set ylabel "s per generation"; set key top left
-plot dir."/scaling.csv" using ($5==1 ? $1 : 1/0):6 with linespoints ls 1 title "1 thread", \
-     '' using ($5==2 ? $1 : 1/0):6 with linespoints ls 3 title "2 threads"
+# Each series reads only its own rows (through awk) so that its points join into a line.
+threads_rows(t) = sprintf("< awk -F, 'NR > 1 && $5 == %d' '%s'", t, dir."/scaling.csv")
+plot threads_rows(1) using 1:6 with linespoints ls 1 title "1 thread", \
+     threads_rows(2) using 1:6 with linespoints ls 3 title "2 threads"
 unset logscale y
 set logscale x
-set yrange [0:1.1]; set ylabel "parallel efficiency t1 / (2 t2)"
-plot dir."/scaling.csv" using ($5==2 ? $1 : 1/0):8 with linespoints ls 3 title "2 threads", 0.85 with lines dt 2 lc rgb "gray" title "85 % target"
+set yrange [0:1.25]; set ylabel "parallel efficiency t1 / (2 t2)"
+plot threads_rows(2) using 1:8 with linespoints ls 3 title "2 threads", 0.85 with lines dt 2 lc rgb "gray" title "85 % target"
 unset multiplot
 unset logscale; set yrange [*:*]
 

@@ -319,6 +319,7 @@ struct RefineContext {
   std::chrono::steady_clock::time_point deadline;
   uint64_t window;             ///< evaluations over which progress is judged
   double stall_factor;         ///< the best cost must shrink this much per window (0: no test)
+  double start_cost;            ///< the cost before the first window
   uint64_t calls = 0;
   double best = std::numeric_limits<double>::infinity();
   std::vector<double> best_after;  ///< best cost after each call
@@ -332,12 +333,13 @@ double refineObjective(const std::vector<double>& genes, std::vector<double>& /*
   if (!std::isfinite(c)) c = 1e300;
   ctx->best = std::min(ctx->best, c);
   ctx->best_after.push_back(ctx->best);
-  // Stalled: the last window did not divide the best cost by the factor (converged, at the
-  // round-off floor, or crawling). The window's start is the cost before it.
   if (std::chrono::steady_clock::now() > ctx->deadline) ctx->opt->force_stop();
+  // Stalled: the last window did not divide the best cost by the factor (converged, at the
+  // round-off floor, or crawling), judged against the best cost before that window.
   const uint64_t w = ctx->window;
   if (ctx->calls >= w && ctx->calls % w == 0) {
-    const double window_start = ctx->calls == w ? ctx->best_after.front() : ctx->best_after[ctx->calls - w - 1];
+    const double window_start =
+        ctx->calls == w ? ctx->start_cost : ctx->best_after[ctx->calls - w - 1];
     if (!(ctx->stall_factor > 0.0) || !(ctx->best * ctx->stall_factor <= window_start))
       ctx->opt->force_stop();
   }
@@ -370,7 +372,8 @@ void EvolutionStrategy::refineBest() {
   const uint64_t window = options_.refine_window_evaluations > 0
                               ? static_cast<uint64_t>(options_.refine_window_evaluations)
                               : 30 * n + 100;
-  RefineContext ctx{cost_.get(), &space_, &opt, deadline_, window, options_.refine_stall_factor};
+  RefineContext ctx{cost_.get(), &space_, &opt, deadline_, window,
+                    options_.refine_stall_factor, start.cost};
   ctx.best = start.cost;
   ctx.best_after.reserve(window);
   opt.set_min_objective(refineObjective, &ctx);

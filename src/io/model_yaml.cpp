@@ -601,6 +601,26 @@ std::string formatNumber(double v) {
 /// Emits a number as a plain scalar (the emitter writes such strings unquoted).
 void emitNumber(YAML::Emitter& out, double v) { out << formatNumber(v); }
 
+/// True when `s` written as a plain scalar reads back as the same string. Not so for control
+/// characters (a lone carriage return, found by fuzz_model_yaml, read back as a line break),
+/// leading or trailing blanks, and other text the emitter passes through unquoted.
+/// Tried where names appear: a block map's value and a flow sequence's item (a lone "\r" reads
+/// back fine as a whole document, not as a map value).
+bool plainRoundTrips(const std::string& s) {
+  YAML::Emitter probe;
+  probe << YAML::BeginMap << YAML::Key << "block" << YAML::Value << s << YAML::Key << "flow"
+        << YAML::Value << YAML::Flow << YAML::BeginSeq << s << s << YAML::EndSeq << YAML::EndMap;
+  if (!probe.good()) return false;
+  try {
+    const YAML::Node back = YAML::Load(probe.c_str());
+    const YAML::Node block = back["block"], flow = back["flow"];
+    return block.IsScalar() && block.Scalar() == s && flow.IsSequence() && flow.size() == 2 &&
+           flow[0].IsScalar() && flow[0].Scalar() == s && flow[1].IsScalar() && flow[1].Scalar() == s;
+  } catch (const YAML::Exception&) {
+    return false;
+  }
+}
+
 /// Names are written plain unless a YAML reader would take them for something other than a
 /// string (true, null, 12, ...): quoting keeps the file readable by other tools as well.
 void emitName(YAML::Emitter& out, const std::string& s) {
@@ -610,7 +630,7 @@ void emitName(YAML::Emitter& out, const std::string& s) {
   for (char c : s) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   double d = 0.0;
   const bool numeric = !s.empty() && YAML::convert<double>::decode(YAML::Node(s), d);
-  if (kSpecial.count(lower) || numeric)
+  if (kSpecial.count(lower) || numeric || !plainRoundTrips(s))
     out << YAML::DoubleQuoted << s;
   else
     out << s;

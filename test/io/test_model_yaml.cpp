@@ -362,6 +362,28 @@ TEST(ModelYaml, NamesThatLookLikeOtherTypesStayStrings) {
   expectSameModel(m, loadModelString(text, "names.yaml"));
 }
 
+// Found by fuzz_model_yaml: a bond type named "\r" loaded, was exported plain and read back as a
+// line break ("expected a name"). Names that would not survive a plain scalar are quoted.
+TEST(ModelYaml, NamesWithControlCharactersAndBlanksRoundTrip) {
+  Model m;
+  m.particles.resize(3);
+  m.particles[0].name = " lead";
+  m.particles[1].name = "trail ";
+  m.particles[2].name = "tab\there";
+  BondType t;
+  t.name = "\r";
+  t.kind = BondKind::kViscosity;
+  t.param(kViscosity).present = t.param(kViscosity).has_value = true;
+  t.param(kViscosity).value = 1.0;
+  m.bond_types.push_back(t);
+  t.name = "a\nb";
+  m.bond_types.push_back(t);
+  m.bonds.push_back(Bond{0, {{1, -1, -1}}});
+  m.bonds.push_back(Bond{1, {{2, -1, -1}}});
+  const std::string text = modelToYaml(m);
+  expectSameModel(m, loadModelString(text, "control_names.yaml"));
+}
+
 TEST(ModelYaml, ExportRejectsInvalidModel) {
   Model m;
   m.particles.resize(1);
