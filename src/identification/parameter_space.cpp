@@ -19,35 +19,35 @@ bool isPositivePhysical(int param) { return param != kRestAngle; }
 /// Initial std of a clamp-length gene (ln scale) around the longest observed bond.
 constexpr double kClampInitSpread = 1e-3;
 
-/// Average observed length of the bonds of a spring type over all frames where both ends are
-/// seen; 0 when there is none.
+/// Calls visit(length) for every observed length of a bond of spring type `type` (frames where
+/// both ends are seen).
+template <class Visit>
+void forEachObservedLength(const Model& model, const Trajectory& trajectory, int type,
+                           const Visit& visit) {
+  if (model.bond_types[type].kind != BondKind::kSpring) return;
+  for (const Bond& bond : model.bonds) {
+    if (bond.type != type) continue;
+    const int a = bond.particles[0], b = bond.particles[1];
+    for (int t = 0; t < trajectory.numFrames(); ++t)
+      if (!trajectory.isOccluded(t, a) && !trajectory.isOccluded(t, b))
+        visit((trajectory.position(t, b) - trajectory.position(t, a)).norm());
+  }
+}
+
+/// Average observed length of the bonds of a spring type; 0 when none is seen.
 double averageObservedLength(const Model& model, const Trajectory& trajectory, int type) {
   double sum = 0.0;
   long count = 0;
-  for (const Bond& bond : model.bonds) {
-    if (bond.type != type || model.bond_types[type].kind != BondKind::kSpring) continue;
-    const int a = bond.particles[0], b = bond.particles[1];
-    for (int t = 0; t < trajectory.numFrames(); ++t) {
-      if (trajectory.isOccluded(t, a) || trajectory.isOccluded(t, b)) continue;
-      sum += (trajectory.position(t, b) - trajectory.position(t, a)).norm();
-      ++count;
-    }
-  }
+  forEachObservedLength(model, trajectory, type, [&](double l) { sum += l; ++count; });
   return count > 0 ? sum / count : 0.0;
 }
 
 /// Longest observed length of the bonds of a spring type; 0 when none is seen.
 double maxObservedLength(const Model& model, const Trajectory& trajectory, int type) {
   double longest = 0.0;
-  for (const Bond& bond : model.bonds) {
-    if (bond.type != type || model.bond_types[type].kind != BondKind::kSpring) continue;
-    const int a = bond.particles[0], b = bond.particles[1];
-    for (int t = 0; t < trajectory.numFrames(); ++t) {
-      if (trajectory.isOccluded(t, a) || trajectory.isOccluded(t, b)) continue;
-      const double l = (trajectory.position(t, b) - trajectory.position(t, a)).norm();
-      if (std::isfinite(l)) longest = std::max(longest, l);
-    }
-  }
+  forEachObservedLength(model, trajectory, type, [&](double l) {
+    if (std::isfinite(l)) longest = std::max(longest, l);
+  });
   return longest;
 }
 
