@@ -126,35 +126,35 @@ void EvolutionStrategy::evaluate(std::vector<Individual>* individuals) {
   evaluations_ += individuals->size();
 }
 
-int EvolutionStrategy::chooseParent(const std::vector<int>& sites, FastRandom& rng) const {
-  auto score = [&](int i) {
-    if (sites.empty()) return population_[i].cost;
-    double s = 0.0;
-    for (int p : sites) s += population_[i].local_costs[p];
-    return s;
-  };
-  const int size = static_cast<int>(population_.size());
+namespace {
+/// Tournament of `rounds` draws among `size` individuals: the one with the lowest score(i).
+template <class Score>
+int tournament(int size, int rounds, FastRandom& rng, const Score& score) {
   int best = rng.index(size);
   double best_score = score(best);
-  for (int k = 1; k < options_.tournament_size; ++k) {
+  for (int k = 1; k < rounds; ++k) {
     const int c = rng.index(size);
     const double s = score(c);
     if (s < best_score) { best = c; best_score = s; }
   }
   return best;
 }
+}  // namespace
+
+int EvolutionStrategy::chooseParent(const std::vector<int>& sites, FastRandom& rng) const {
+  return tournament(static_cast<int>(population_.size()), options_.tournament_size, rng,
+                    [&](int i) {
+                      if (sites.empty()) return population_[i].cost;
+                      double s = 0.0;
+                      for (int p : sites) s += population_[i].local_costs[p];
+                      return s;
+                    });
+}
 
 int EvolutionStrategy::chooseParentAt(int site, FastRandom& rng) const {
   // chooseParent({site}) without building a vector: the crossover calls it once per site.
-  const int size = static_cast<int>(population_.size());
-  int best = rng.index(size);
-  double best_score = population_[best].local_costs[site];
-  for (int k = 1; k < options_.tournament_size; ++k) {
-    const int c = rng.index(size);
-    const double s = population_[c].local_costs[site];
-    if (s < best_score) { best = c; best_score = s; }
-  }
-  return best;
+  return tournament(static_cast<int>(population_.size()), options_.tournament_size, rng,
+                    [&](int i) { return population_[i].local_costs[site]; });
 }
 
 void EvolutionStrategy::mutateGenes(Individual* child, const std::vector<int>& genes,

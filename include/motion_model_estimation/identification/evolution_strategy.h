@@ -129,8 +129,9 @@ class EvolutionStrategy {
   std::vector<uint64_t> operator_successes_;
   std::vector<double> initial_guess_;
   double initial_guess_spread_ = 0.0;
-  std::unique_ptr<ThreadPool> pool_;
-  std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();  ///< options_.threads - 1 workers (none for 1 thread)
+  std::unique_ptr<ThreadPool> pool_;  ///< options_.threads - 1 workers (none for 1 thread)
+  /// Refinements stop here (setDeadline); default: never.
+  std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
 };
 
 }  // namespace mme
