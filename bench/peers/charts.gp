@@ -4,7 +4,9 @@
 set terminal pngcairo size 1200,800 noenhanced font ",10"
 set datafile separator ","
 set datafile missing "n/a"
-methods = "es_local es_global cmaes sade bobyqa lm lls es_early"
+methods = "es_local es_global cmaes sade bobyqa lm lls es_early es_lm"
+# the methods of the stability map (es_early runs in the speed-accuracy part only)
+map_methods = "1 2 3 4 5 6 7 9"
 set style line 1 lc rgb "#1f77b4" lw 2 pt 7
 set style line 2 lc rgb "#aec7e8" lw 2 pt 7
 set style line 3 lc rgb "#d62728" lw 2 pt 5
@@ -13,6 +15,7 @@ set style line 5 lc rgb "#2ca02c" lw 2 pt 9
 set style line 6 lc rgb "#9467bd" lw 2 pt 11
 set style line 7 lc rgb "#000000" lw 2 pt 13 ps 2
 set style line 8 lc rgb "#ff7f0e" lw 2 dt 2 pt 7
+set style line 9 lc rgb "#17becf" lw 3 pt 7
 floor_err = 1e-7
 clip(x) = (x < floor_err ? floor_err : x)
 
@@ -31,14 +34,14 @@ do for [scene in scenes] {
     set xlabel "cost evaluations"; set ylabel errname." parameter error [%]"
     plot for [k=1:6] trace using (strcol(1) eq scene && strcol(2) eq word(methods,k) && $3==1 ? $4 : 1/0):(clip(column(col+0))) \
            with steps ls k title word(methods,k), \
-         trace using (strcol(1) eq scene && strcol(2) eq "es_early" && $3==1 ? $4 : 1/0):(clip(column(col+0))) \
-           with steps ls 8 title "es_early", \
+         for [k=8:9] trace using (strcol(1) eq scene && strcol(2) eq word(methods,k) && $3==1 ? $4 : 1/0):(clip(column(col+0))) \
+           with steps ls k title word(methods,k), \
          runs using (strcol(1) eq scene && strcol(2) eq "lls" && $3==1 ? 1 : 1/0):(clip(column(rcol))) with points ls 7 title "lls"
     set xlabel "wall time [s]"
     plot for [k=1:6] trace using (strcol(1) eq scene && strcol(2) eq word(methods,k) && $3==1 ? $5 : 1/0):(clip(column(col+0))) \
            with steps ls k title word(methods,k), \
-         trace using (strcol(1) eq scene && strcol(2) eq "es_early" && $3==1 ? $5 : 1/0):(clip(column(col+0))) \
-           with steps ls 8 title "es_early", \
+         for [k=8:9] trace using (strcol(1) eq scene && strcol(2) eq word(methods,k) && $3==1 ? $5 : 1/0):(clip(column(col+0))) \
+           with steps ls k title word(methods,k), \
          runs using (strcol(1) eq scene && strcol(2) eq "lls" && $3==1 ? ($7 > 1e-5 ? $7 : 1e-5) : 1/0):(clip(column(rcol))) with points ls 7 title "lls"
   }
   unset multiplot
@@ -60,8 +63,8 @@ do for [axis in "noise omega_h occlusion spread unknowns conditional"] {
   set xlabel axis
   set xrange [-0.3:*]
   plot rows(axis, "es_local") using 3:(1/0):xtic(2) notitle, \
-       for [k=1:7] rows(axis, word(methods,k)) using ($3 + (k-4)*0.02):7 \
-       with linespoints ls k title word(methods,k)
+       for [k in map_methods] rows(axis, word(methods,k+0)) using ($3 + (k+0-4)*0.02):7 \
+       with linespoints ls k+0 title word(methods,k+0)
 }
 unset multiplot
 set xrange [*:*]; set yrange [*:*]
@@ -81,8 +84,8 @@ set style data linespoints
 set xlabel "omega_max * h (explicit limit 2)"
 set xrange [-0.3:*]
 plot rows("omega_h", "es_local") using 3:(1/0):xtic(2) notitle, \
-     for [k=1:7] rows("omega_h", word(methods,k)) using ($3 + (k-4)*0.02):8 \
-     with linespoints ls k title word(methods,k)
+     for [k in map_methods] rows("omega_h", word(methods,k+0)) using ($3 + (k+0-4)*0.02):8 \
+     with linespoints ls k+0 title word(methods,k+0)
 unset multiplot
 set xrange [*:*]; set yrange [*:*]
 
@@ -108,5 +111,5 @@ set terminal pngcairo size 800,500 noenhanced font ",10"
 set logscale x
 set xlabel "unknowns"; set ylabel "median generations to max error < 1 % (converged seeds)"
 set key top left
-plot for [k in "1 2 3 4"] dir."/unknowns_generations.csv" using (strcol(2) eq word(methods,k+0) ? $1 : 1/0):5 \
+plot for [k in "1 2 3 4 9"] dir."/unknowns_generations.csv" using (strcol(2) eq word(methods,k+0) ? $1 : 1/0):5 \
      with linespoints ls k+0 title word(methods,k+0)

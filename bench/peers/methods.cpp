@@ -26,7 +26,7 @@
 namespace bench {
 
 std::vector<std::string> allMethods() {
-  return {"es_local", "es_early", "es_global", "cmaes", "sade", "bobyqa", "lm", "lls"};
+  return {"es_local", "es_early", "es_lm", "es_global", "cmaes", "sade", "bobyqa", "lm", "lls"};
 }
 
 bool methodAvailable(const std::string& method) {
@@ -160,8 +160,10 @@ class Tracker {
 };
 
 // ---------------------------------------------------------------- the engine (two variants)
+enum class Schedule { kPaper, kEarlyBobyqa, kEarlyLm };
+
 RunResult runEs(const Problem& p, uint64_t seed, const Budget& budget, bool keep_trace, bool local,
-                bool early_refinement) {
+                Schedule schedule) {
   RunResult r;
   Tracker tracker(p, budget, keep_trace);
   mme::EsOptions o;  // default options
@@ -169,11 +171,16 @@ RunResult runEs(const Problem& p, uint64_t seed, const Budget& budget, bool keep
   o.threads = 1;
   // A refinement runs while it pays, possibly for many windows: keep it inside the budget.
   o.refine_total_evaluation_cap = budget.max_evaluations;
-  if (early_refinement) {
+  if (schedule == Schedule::kEarlyBobyqa) {
     // The engine with another refinement schedule (a setting, not a code change): BOBYQA from
     // generation 10, every 10, instead of the paper's 400 / 100.
     o.refine_start_generation = kEarlyRefineGeneration;
     o.refine_period = kEarlyRefineGeneration;
+  } else if (schedule == Schedule::kEarlyLm) {
+    // Settings again: the Levenberg-Marquardt refinement on the residuals, early and often.
+    o.refine_algorithm = "levenberg_marquardt";
+    o.refine_start_generation = kLmRefineGeneration;
+    o.refine_period = kLmRefineGeneration;
   }
   if (!local) {
     // Ablation through the options only (the engine is unchanged): the local-cost operators
@@ -556,9 +563,12 @@ bool solveEquationError(const Problem& p, std::vector<double>* values, std::stri
 RunResult runMethod(const std::string& method, const Problem& problem, uint64_t seed,
                     const Budget& budget, bool keep_trace) {
   RunResult r;
-  if (method == "es_local") r = runEs(problem, seed, budget, keep_trace, true, false);
-  else if (method == "es_early") r = runEs(problem, seed, budget, keep_trace, true, true);
-  else if (method == "es_global") r = runEs(problem, seed, budget, keep_trace, false, false);
+  if (method == "es_local") r = runEs(problem, seed, budget, keep_trace, true, Schedule::kPaper);
+  else if (method == "es_early")
+    r = runEs(problem, seed, budget, keep_trace, true, Schedule::kEarlyBobyqa);
+  else if (method == "es_lm") r = runEs(problem, seed, budget, keep_trace, true, Schedule::kEarlyLm);
+  else if (method == "es_global")
+    r = runEs(problem, seed, budget, keep_trace, false, Schedule::kPaper);
   else if (method == "bobyqa") r = runBobyqa(problem, seed, budget, keep_trace);
   else if (method == "lls") r = runLls(problem, budget);
 #ifdef MME_HAVE_PAGMO

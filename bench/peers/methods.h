@@ -4,6 +4,8 @@
 //   es_local   the paper's ES with local costs (mme::EvolutionStrategy, default options)
 //   es_early   the same engine with its refinement from generation 10, every 10 (the paper:
 //              from 400, every 100); run in the speed-accuracy part only
+//   es_lm      the same engine with the Levenberg-Marquardt refinement (refine_algorithm
+//              levenberg_marquardt) from generation kLmRefineGeneration, every as many
 //   es_global  the same engine with the local-cost operators switched off through its options
 //              (share_partial_replica = share_crossover = 0, their share given to share_replica)
 //   cmaes      pagmo2 CMA-ES (restarts from the next starts when it stops or stalls)
@@ -24,6 +26,8 @@ namespace bench {
 
 /// es_early's refinement schedule: first refinement and period [generations].
 constexpr int kEarlyRefineGeneration = 10;
+/// es_lm's: first refinement and period [generations].
+constexpr int kLmRefineGeneration = 5;
 
 struct Budget {
   uint64_t max_evaluations = 100000;  ///< cost evaluations (full-cost equivalents)

@@ -126,9 +126,10 @@ struct CostFunction::Impl {
     return pairs;
   }
 
-  /// Predicts frames [f0, f1) and adds their squared errors into local (size n).
+  /// Predicts frames [f0, f1) and adds their squared errors into local (size n); with
+  /// `residuals`, also writes each term's error vector at 3 x its index in `valid`.
   void run(const detail::LawTable& laws, const SpringLaw* inter_laws, size_t f0, size_t f1,
-           Workspace* ws, double* local) const {
+           Workspace* ws, double* local, double* residuals = nullptr) const {
     ensureScratch(ws);
     double* x = ws->x.data();
     double* v = ws->v.data();
@@ -152,6 +153,12 @@ struct CostFunction::Impl {
         const double dy = x[i3 + 1] - target[i3 + 1];
         const double dz = x[i3 + 2] - target[i3 + 2];
         local[valid[k]] += dx * dx + dy * dy + dz * dz;
+        if (residuals) {
+          double* r = residuals + 3 * static_cast<size_t>(k);
+          r[0] = dx;
+          r[1] = dy;
+          r[2] = dz;
+        }
       }
     }
   }
@@ -404,6 +411,22 @@ double CostFunction::evaluate(const std::vector<double>& free_values,
   for (double c : local) total += c;
   return total;
 }
+
+double CostFunction::residuals(const std::vector<double>& free_values,
+                               std::vector<double>* residuals) const {
+  thread_local Workspace ws;
+  const Impl& m = *impl_;
+  m.prepareLaws(free_values, &ws);
+  ws.local.assign(m.n, 0.0);
+  residuals->assign(residualCount(), 0.0);
+  m.run(ws.laws, ws.inter_laws.data(), 0, m.frames.size(), &ws, ws.local.data(),
+        residuals->data());
+  double total = 0.0;
+  for (double c : ws.local) total += c;
+  return total;
+}
+
+size_t CostFunction::residualCount() const { return 3 * impl_->valid.size(); }
 
 double CostFunction::evaluateParallel(const std::vector<double>& free_values,
                                       std::vector<double>* local_costs, int threads) const {

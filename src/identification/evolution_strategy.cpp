@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/identification/levenberg_marquardt.h"
 
 namespace mme {
 
@@ -36,8 +37,8 @@ std::string validateOptions(const EsOptions& o) {
       !std::isfinite(o.refine_stall_factor))
     return "refine_stall_factor must be 0 (one window) or > 1";
   if (o.refine_algorithm != "bobyqa" && o.refine_algorithm != "newuoa" &&
-      o.refine_algorithm != "praxis")
-    return "refine_algorithm must be bobyqa, newuoa or praxis";
+      o.refine_algorithm != "praxis" && o.refine_algorithm != "levenberg_marquardt")
+    return "refine_algorithm must be bobyqa, newuoa, praxis or levenberg_marquardt";
   return "";
 }
 
@@ -347,19 +348,17 @@ double refineObjective(const std::vector<double>& genes, std::vector<double>& /*
 }
 }  // namespace
 
-void EvolutionStrategy::refineBest() {
-  // A Powell-family derivative-free local search from the best individual (the paper's
-  // "variant of the Powell method"), inside the bounds; its result joins the population only
-  // when it improves the best. One long run rather than fixed short ones: ill-conditioned
-  // costs (a stiff clamp next to a weak cubic term) need BOBYQA's quadratic model to mature,
-  // which a restart throws away; it stops when a window of evaluations no longer pays.
+std::vector<double> EvolutionStrategy::refineWithNlopt(const Individual& start, uint64_t* calls) {
+  // A Powell-family derivative-free local search (the paper's "variant of the Powell method").
+  // One long run rather than fixed short ones: ill-conditioned costs (a stiff clamp next to a
+  // weak cubic term) need BOBYQA's quadratic model to mature, which a restart throws away; it
+  // stops when a window of evaluations no longer pays.
   const size_t n = space_.size();
   nlopt::algorithm algo = nlopt::LN_BOBYQA;
   if (options_.refine_algorithm == "newuoa") algo = nlopt::LN_NEWUOA_BOUND;
   if (options_.refine_algorithm == "praxis") algo = nlopt::LN_PRAXIS;
   nlopt::opt opt(algo, static_cast<unsigned>(n));
   std::vector<double> lo(n), hi(n), step(n);
-  const Individual& start = best();
   for (size_t k = 0; k < n; ++k) {
     lo[k] = space_.gene(k).lower;
     hi[k] = space_.gene(k).upper;
@@ -369,38 +368,76 @@ void EvolutionStrategy::refineBest() {
   opt.set_lower_bounds(lo);
   opt.set_upper_bounds(hi);
   opt.set_initial_step(step);
-  const uint64_t window = options_.refine_window_evaluations > 0
-                              ? static_cast<uint64_t>(options_.refine_window_evaluations)
-                              : 30 * n + 100;
+  const uint64_t window = refineWindow();
   RefineContext ctx{cost_.get(), &space_, &opt, deadline_, window,
                     options_.refine_stall_factor, start.cost};
   ctx.best = start.cost;
   ctx.best_after.reserve(window);
   opt.set_min_objective(refineObjective, &ctx);
-  uint64_t max_evaluations = options_.refine_max_evaluations > 0
-                                 ? static_cast<uint64_t>(options_.refine_max_evaluations)
-                                 : 40 * window;
-  if (options_.refine_total_evaluation_cap > 0) {
-    // +1: the refined point's re-evaluation below.
-    const uint64_t left = options_.refine_total_evaluation_cap > evaluations_ + 1
-                              ? options_.refine_total_evaluation_cap - evaluations_ - 1 : 0;
-    if (left < 2 * n + 2) return;  // BOBYQA needs 2n+1 points before it moves
-    max_evaluations = std::min(max_evaluations, left);
-  }
+  const uint64_t max_evaluations = refineEvaluationLimit();
+  std::vector<double> x = start.genes;
+  *calls = 0;
+  if (max_evaluations < 2 * n + 2) return x;  // BOBYQA needs 2n+1 points before it moves
   opt.set_maxeval(static_cast<int>(std::min<uint64_t>(max_evaluations, 1u << 30)));
   opt.set_ftol_rel(1e-15);
-  std::vector<double> x = start.genes;
   double fx = start.cost;
   try {
     opt.optimize(x, fx);
   } catch (const std::exception&) {
     // NLopt signals roundoff-limited or forced stops by exceptions; x holds the best point.
   }
-  evaluations_ += ctx.calls;
+  *calls = ctx.calls;
+  return x;
+}
+
+uint64_t EvolutionStrategy::refineWindow() const {
+  return options_.refine_window_evaluations > 0
+             ? static_cast<uint64_t>(options_.refine_window_evaluations)
+             : 30 * space_.size() + 100;
+}
+
+uint64_t EvolutionStrategy::refineEvaluationLimit() const {
+  uint64_t max_evaluations = options_.refine_max_evaluations > 0
+                                 ? static_cast<uint64_t>(options_.refine_max_evaluations)
+                                 : 40 * refineWindow();
+  if (options_.refine_total_evaluation_cap > 0) {
+    // +1: the refined point's re-evaluation.
+    const uint64_t left = options_.refine_total_evaluation_cap > evaluations_ + 1
+                              ? options_.refine_total_evaluation_cap - evaluations_ - 1 : 0;
+    max_evaluations = std::min(max_evaluations, left);
+  }
+  return max_evaluations;
+}
+
+void EvolutionStrategy::refineBest() {
+  // A local search from the best individual, inside the bounds; its result joins the
+  // population only when it improves the best.
+  const size_t n = space_.size();
+  const Individual& start = best();
+  uint64_t calls = 0;
+  std::vector<double> x;
+  if (options_.refine_algorithm == "levenberg_marquardt") {
+    // The cost is a sum of squares: Gauss-Newton steps on its residuals. Same stopping rule
+    // as BOBYQA's, counted in Jacobians (3 in a row that do not divide the cost by the
+    // stall factor), same evaluation limits and deadline.
+    LmSettings lm;
+    lm.max_evaluations = refineEvaluationLimit();
+    if (lm.max_evaluations < n + 2) return;  // not even one Jacobian and step
+    lm.stall_factor = options_.refine_stall_factor;
+    lm.deadline = deadline_;
+    if (options_.threads > 1 && !pool_) pool_ = std::make_unique<ThreadPool>(options_.threads);
+    LmResult result = levenbergMarquardt(*cost_, space_, start.genes, lm, pool_.get());
+    calls = result.evaluations;
+    x = std::move(result.genes);
+  } else {
+    x = refineWithNlopt(start, &calls);
+  }
+  evaluations_ += calls;
+  if (calls == 0) return;
   ++operator_counts_[static_cast<int>(Operator::kRefine)];
   Individual refined = start;
-  refined.genes = x;
-  for (size_t k = 0; k < n; ++k) refined.genes[k] = std::min(std::max(x[k], lo[k]), hi[k]);
+  for (size_t k = 0; k < n; ++k)
+    refined.genes[k] = std::min(std::max(x[k], space_.gene(k).lower), space_.gene(k).upper);
   std::vector<Individual> one{refined};
   evaluate(&one);
   if (one[0].cost < start.cost) {

@@ -94,10 +94,11 @@ EstimatorNodeOptions readEstimatorOptions(const ros::NodeHandle& pnh) {
   require(e.es.threads >= 1 && e.es.threads <= 256, "~threads must be in [1, 256]");
   read(pnh, "refine_start_generation", &e.es.refine_start_generation);
   read(pnh, "refine_period", &e.es.refine_period);
+  read(pnh, "refine_algorithm", &e.es.refine_algorithm);  // checked by validateOptions below
   require(e.es.refine_start_generation >= 0 && e.es.refine_period >= 0,
           "~refine_start_generation and ~refine_period must be >= 0");
   const std::string bad = validateOptions(e);
-  require(bad.empty(), bad);
+  require(bad.empty(), "~" + bad);  // its messages name the option, i.e. the parameter
   return o;
 }
 

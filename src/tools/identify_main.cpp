@@ -19,7 +19,9 @@ const char* kUsage =
     "usage: identify --model M.yaml --trajectory FILE(.trc|.c3d|.bag) [--topic T] --out OUT.yaml\n"
     "                [--method es] [--generations N] [--population P] [--window-frames W]\n"
     "                [--first-frame F] [--frames N] [--seed S] [--threads T]\n"
-    "                [--compare-to-model] [--target-cost C] [--max-time-s S] [--quiet]\n";
+    "                [--compare-to-model] [--target-cost C] [--max-time-s S] [--quiet]\n"
+    "                [--refine bobyqa|newuoa|praxis|levenberg_marquardt] [--refine-start G]\n"
+    "                [--refine-period G]\n";
 
 mme::Trajectory loadTrajectory(const std::string& path, const std::string& topic) {
   if (mme::fileExtension(path) == ".bag") return mme::readBag(path, topic);
@@ -45,7 +47,7 @@ int run(int argc, char** argv) {
   mme::CliArgs args(argc, argv,
                     {"model", "trajectory", "topic", "out", "method", "generations", "population",
                      "window-frames", "first-frame", "frames", "seed", "threads", "target-cost",
-                     "max-time-s"},
+                     "max-time-s", "refine", "refine-start", "refine-period"},
                     {"compare-to-model", "quiet", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -65,6 +67,16 @@ int run(int argc, char** argv) {
   options.es.offspring = options.es.population;
   options.es.seed = static_cast<uint64_t>(args.getInt("seed", 1, 0, 0x7fffffffL));
   options.es.threads = static_cast<int>(args.getInt("threads", 1, 1, 256));
+  // The refinement: the paper's BOBYQA from generation 400 every 100 unless told otherwise.
+  options.es.refine_algorithm = args.get("refine", options.es.refine_algorithm);
+  options.es.refine_start_generation = static_cast<int>(
+      args.getInt("refine-start", options.es.refine_start_generation, 0, 100000000));
+  options.es.refine_period =
+      static_cast<int>(args.getInt("refine-period", options.es.refine_period, 0, 100000000));
+  {
+    const std::string bad = mme::validateOptions(options.es);
+    if (!bad.empty()) throw mme::InputError("--refine: " + bad);
+  }
   options.target_cost = args.getDouble("target-cost", 0.0, 0.0, 1e300);
   options.max_wall_time_s = args.getDouble("max-time-s", 0.0, 0.0, 1e9);
   const bool compare = args.has("compare-to-model");

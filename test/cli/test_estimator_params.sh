@@ -43,6 +43,7 @@ expect_exit2 "~population must be >= 2" _model:="$model" _population:=1
 expect_exit2 "~input_type must be" _model:="$model" _input_type:=kinect
 expect_exit2 "~update_rate_hz" _model:="$model" _update_rate_hz:=0
 expect_exit2 "~threads" _model:="$model" _threads:=0
+expect_exit2 "~refine_algorithm must be" _model:="$model" _refine_algorithm:=powell
 expect_exit2 "~min_frames" _model:="$model" _window_frames:=20 _min_frames:=50
 expect_exit2 "missing_model.yaml" _model:="$tmp/missing_model.yaml"
 printf 'particles:\n  - {name: a, mass: -1}\n' >"$tmp/bad_model.yaml"

@@ -183,6 +183,33 @@ Model chainModel(int substeps) {
   return m;
 }
 
+// The residual vector behind the cost (least-squares refinements use it): its squares sum to
+// the cost, one x y z triple per term, zero at the truth and moved by a parameter change, with
+// occluded terms left out.
+TEST(Cost, ResidualsAreTheCostAsASumOfSquares) {
+  const Model model = chainModel(1);  // one explicit step per frame: exact at the truth
+  Trajectory traj = simulateTrajectory(model, 20, 50.0);
+  traj.occluded[10 * 8 + 3] = 1;
+  traj.position(10, 3) = Vec::Zero();
+  CostFunction cost(model, traj);
+  ASSERT_EQ(cost.residualCount(), 3 * cost.termCount());
+  std::vector<double> p = getValues(model, cost.freeParameters());
+  std::vector<double> r;
+  EXPECT_NEAR(cost.residuals(p, &r), 0.0, 1e-20);
+  ASSERT_EQ(r.size(), cost.residualCount());
+  for (double x : r) EXPECT_NEAR(x, 0.0, 1e-10);
+  p[0] *= 1.3;
+  const double c = cost.residuals(p, &r);
+  double sum = 0.0, largest = 0.0;
+  for (double x : r) {
+    sum += x * x;
+    largest = std::max(largest, std::abs(x));
+  }
+  EXPECT_GT(largest, 1e-6);
+  EXPECT_NEAR(sum, c, 1e-12 * c);
+  EXPECT_EQ(c, cost.evaluate(p, nullptr));  // the same cost, summed the same way
+}
+
 TEST(Cost, OcclusionDropsExactlyTheExpectedTerms) {
   for (int substeps : {1, 2}) {
     const Model model = chainModel(substeps);

@@ -34,7 +34,13 @@ class CostFunction {
   const std::vector<ParamRef>& freeParameters() const;
   /// Global cost [m^2]; fills local_costs (size = particles) when not null.
   double evaluate(const std::vector<double>& free_values, std::vector<double>* local_costs) const;
-  /// Same, splitting frames over `threads` threads (deterministic result for a thread count).
+  /// The cost as a sum of squares: residuals (size residualCount()) = predicted minus observed
+  /// position [m] of every term, x y z, terms in a fixed order (frame, then particle). Returns
+  /// the global cost, the same value evaluate() gives (summed per particle first).
+  double residuals(const std::vector<double>& free_values, std::vector<double>* residuals) const;
+  /// 3 x termCount().
+  size_t residualCount() const;
+  /// Same as evaluate(), splitting frames over `threads` threads (deterministic result for a thread count).
   double evaluateParallel(const std::vector<double>& free_values, std::vector<double>* local_costs,
                           int threads) const;
   /// Bond (spring/flexion/interaction candidate) evaluations one evaluate() call performs at

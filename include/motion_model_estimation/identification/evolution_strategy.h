@@ -45,7 +45,10 @@ struct EsOptions {
   /// Evaluations a refinement may bring the run's total to (0 = no limit): lets a caller with
   /// an evaluation budget keep a long refinement inside it.
   uint64_t refine_total_evaluation_cap = 0;
-  std::string refine_algorithm = "bobyqa";  ///< bobyqa | newuoa | praxis
+  /// bobyqa | newuoa | praxis (Powell family, derivative-free) | levenberg_marquardt (on the
+  /// cost's residuals, forward-difference Jacobian: stops after refine_stall_factor failed for
+  /// 3 Jacobians in a row; the evaluation caps and the deadline apply as to the others).
+  std::string refine_algorithm = "bobyqa";
 };
 
 /// Empty string when the options are usable, else the reason naming the option.
@@ -115,6 +118,10 @@ class EvolutionStrategy {
   void forEach(size_t count, const std::function<void(size_t)>& body);
   void select(std::vector<Individual>* children, const std::vector<Operator>& ops);
   void refineBest();
+  /// NLopt (BOBYQA, NEWUOA, PRAXIS) from `start`: the best point; *calls = its evaluations.
+  std::vector<double> refineWithNlopt(const Individual& start, uint64_t* calls);
+  uint64_t refineWindow() const;           ///< evaluations per progress window
+  uint64_t refineEvaluationLimit() const;  ///< a refinement's evaluations, caps applied
   void initialise();
 
   ParameterSpace space_;

@@ -1,0 +1,130 @@
+#include "motion_model_estimation/identification/levenberg_marquardt.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace mme {
+
+namespace {
+
+/// Residuals at genes (finite or flagged): false when the model blew up there.
+bool residualsAt(const CostFunction& cost, const ParameterSpace& space,
+                 const std::vector<double>& genes, std::vector<double>* r, double* c) {
+  *c = cost.residuals(space.toPhysical(genes), r);
+  return std::isfinite(*c);
+}
+
+}  // namespace
+
+LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& space,
+                            const std::vector<double>& start, const LmSettings& settings,
+                            ThreadPool* pool) {
+  const size_t n = space.size();
+  const size_t m = cost.residualCount();
+  const uint64_t max_evaluations =
+      settings.max_evaluations > 0 ? settings.max_evaluations : 50 * (n + 1);
+  LmResult out;
+  out.genes = start;
+  std::vector<double> r0;
+  if (!residualsAt(cost, space, start, &r0, &out.cost)) out.cost = std::numeric_limits<double>::infinity();
+  out.evaluations = 1;
+  if (n == 0 || m == 0 || !std::isfinite(out.cost)) return out;
+
+  std::vector<double> lo(n), hi(n);
+  for (size_t k = 0; k < n; ++k) {
+    lo[k] = space.gene(k).lower;
+    hi[k] = space.gene(k).upper;
+  }
+  Eigen::MatrixXd jac(m, n);
+  Eigen::VectorXd residual =
+      Eigen::Map<const Eigen::VectorXd>(r0.data(), static_cast<Eigen::Index>(m));
+  std::vector<double> x = start, trial(n), r_trial;
+  std::vector<double> steps(n);
+  std::vector<char> column_ok(n);
+  std::vector<double> cost_after{out.cost};  // the start, then after each Jacobian's step
+  double mu = -1.0, nu = 2.0;
+  const auto out_of_time = [&]() {
+    return std::chrono::steady_clock::now() > settings.deadline;
+  };
+  while (out.evaluations + n <= max_evaluations && !out_of_time() && out.cost > 0.0) {
+    // Forward-difference Jacobian, stepping inward at a bound.
+    for (size_t k = 0; k < n; ++k) {
+      double h = 1e-7 * std::max({std::fabs(x[k]), 1e-3 * (hi[k] - lo[k]), 1e-8});
+      if (x[k] + h > hi[k]) h = -h;
+      steps[k] = h;
+    }
+    const auto column = [&](size_t k) {
+      thread_local std::vector<double> genes, rk;
+      genes = x;
+      genes[k] += steps[k];
+      double ck = 0.0;
+      column_ok[k] = residualsAt(cost, space, genes, &rk, &ck);
+      if (!column_ok[k]) return;
+      for (size_t i = 0; i < m; ++i) jac(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) =
+          (rk[i] - residual[static_cast<Eigen::Index>(i)]) / steps[k];
+    };
+    if (pool) pool->parallelFor(n, column);
+    else for (size_t k = 0; k < n; ++k) column(k);
+    out.evaluations += n;
+    ++out.jacobians;
+    for (size_t k = 0; k < n; ++k)
+      if (!column_ok[k]) jac.col(static_cast<Eigen::Index>(k)).setZero();  // blew up: hold it
+
+    const Eigen::MatrixXd jtj = jac.transpose() * jac;
+    const Eigen::VectorXd g = jac.transpose() * residual;
+    Eigen::VectorXd scale = jtj.diagonal().cwiseMax(1e-30 * std::max(jtj.diagonal().maxCoeff(), 1e-300));
+    if (mu < 0.0) mu = 1e-3;
+    // Damped steps until one lowers the cost (Nielsen's update of the damping).
+    bool accepted = false;
+    while (!accepted && out.evaluations < max_evaluations && !out_of_time()) {
+      Eigen::MatrixXd a = jtj;
+      a.diagonal() += mu * scale;
+      const Eigen::VectorXd dx = a.ldlt().solve(-g);
+      if (!dx.allFinite()) {
+        mu *= nu;
+        nu *= 2.0;
+        if (nu > 1e15) break;
+        continue;
+      }
+      bool moved = false;
+      for (size_t k = 0; k < n; ++k) {
+        trial[k] = std::min(std::max(x[k] + dx[static_cast<Eigen::Index>(k)], lo[k]), hi[k]);
+        moved = moved || trial[k] != x[k];
+      }
+      if (!moved) break;  // the step vanished (round-off floor)
+      double c_trial = 0.0;
+      const bool ok = residualsAt(cost, space, trial, &r_trial, &c_trial);
+      ++out.evaluations;
+      if (ok && c_trial < out.cost) {
+        // Gain ratio against the linear model's predicted decrease.
+        const double predicted = dx.dot(mu * scale.cwiseProduct(dx) - g);
+        const double rho = predicted > 0.0 ? (out.cost - c_trial) / predicted : 0.0;
+        mu *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
+        nu = 2.0;
+        x = trial;
+        out.cost = c_trial;
+        residual = Eigen::Map<const Eigen::VectorXd>(r_trial.data(), static_cast<Eigen::Index>(m));
+        accepted = true;
+      } else {
+        mu *= nu;
+        nu *= 2.0;
+        if (nu > 1e15) break;  // no damping helps: at the floor of what the data allow
+      }
+    }
+    if (!accepted) break;
+    cost_after.push_back(out.cost);
+    const size_t iterations = cost_after.size() - 1;
+    const size_t w = static_cast<size_t>(std::max(settings.stall_iterations, 1));
+    if (iterations >= w) {
+      if (!(settings.stall_factor > 0.0)) break;
+      if (!(out.cost * settings.stall_factor <= cost_after[iterations - w])) break;
+    }
+  }
+  out.genes = x;
+  return out;
+}
+
+}  // namespace mme

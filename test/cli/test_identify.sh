@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# identify: recovers paper_object's 20 parameters from a trajectory file and a model without
+# values (Levenberg-Marquardt refinement from generation 5), writes the same model for any
+# thread count, and refuses bad refinement options and missing files with exit 2.
+set -euo pipefail
+here=$(cd "$(dirname "$0")/../.." && pwd)
+source "$here/scripts/env.sh"
+bin="$here/.ws/devel/lib/motion_model_estimation"
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+
+"$bin/simulate" --scene paper_object --frames 60 --out "$tmp/data.trc" --truth-out "$tmp/truth.yaml"
+# The model as identification sees it: free parameters without values.
+sed -E 's/\{value: [^,]*, free: true/{free: true/' "$tmp/truth.yaml" >"$tmp/free.yaml"
+! grep -q "value:" "$tmp/free.yaml"
+fast=(--refine levenberg_marquardt --refine-start 5 --refine-period 5 --generations 10)
+"$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/one.yaml" \
+  "${fast[@]}" --quiet >/dev/null
+"$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/two.yaml" \
+  "${fast[@]}" --threads 2 --quiet >/dev/null
+# Same seed and input: the same model for 1 and 2 threads (only the recorded wall time differs).
+cmp <(grep -v wall_time_s "$tmp/one.yaml") <(grep -v wall_time_s "$tmp/two.yaml")
+grep -q wall_time_s "$tmp/one.yaml"
+values() { grep -o 'value: [^,}]*' "$1" | awk '{print $2}'; }
+[ "$(values "$tmp/truth.yaml" | wc -l)" -eq 20 ]
+paste <(values "$tmp/truth.yaml") <(values "$tmp/one.yaml") | awk '
+  { e = ($2 - $1) / $1; if (e < 0) e = -e; if (e > worst) worst = e; n++ }
+  END { printf "identify: max relative error %.3g over %d parameters\n", worst, n;
+        exit !(n == 20 && worst < 1e-6) }'
+
+expect_exit2() {  # expect_exit2 PATTERN ARGS... : exit code 2 and PATTERN in a one-line stderr
+  local pattern=$1; shift
+  set +e; "$bin/identify" "$@" 2>"$tmp/err" >/dev/null; local rc=$?; set -e
+  [ "$rc" -eq 2 ] || { echo "expected exit 2, got $rc for: $*"; cat "$tmp/err"; exit 1; }
+  grep -q -- "$pattern" "$tmp/err" || { echo "missing '$pattern' in: $(cat "$tmp/err")"; exit 1; }
+  [ "$(wc -l <"$tmp/err")" -eq 1 ] || { echo "error is not one line: $(cat "$tmp/err")"; exit 1; }
+}
+ok=(--model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/x.yaml")
+expect_exit2 "refine_algorithm must be" "${ok[@]}" --refine lm
+expect_exit2 "--refine-start" "${ok[@]}" --refine-start -1
+expect_exit2 "--refine-period" "${ok[@]}" --refine-period many
+expect_exit2 "nope.trc" --model "$tmp/free.yaml" --trajectory "$tmp/nope.trc" --out "$tmp/x.yaml"
+[ ! -e "$tmp/x.yaml" ]
+echo "test_identify: ok"
