@@ -488,10 +488,10 @@ const std::map<std::string, std::string>& failureReasons() {
        "stalls on the flat steps of conditional bonds (no slope for a free threshold) and its "
        "O(n^2)-per-step model algebra makes it too slow beyond ~100 unknowns."},
       {"lm",
-       "Gauss-Newton steps need a useful numeric Jacobian of the per-(particle, frame) residuals: "
-       "it fails where that derivative is zero or meaningless (free thresholds of conditional "
-       "bonds, Provot clamps) and, as a local method, from starts outside the basin; each "
-       "iteration costs 2n+1 evaluations."},
+       "Gauss-Newton steps need a useful numeric Jacobian of the residuals: it fails where that "
+       "derivative is zero or meaningless (free thresholds of conditional bonds, Provot clamps) "
+       "and, as a local method, from starts outside the basin (it restarts from the next random "
+       "start); each iteration costs n+1 evaluations."},
       {"lls",
        "it solves the equation error exactly in one step (for substeps = 1 that is the paper's "
        "cost itself, so it is the cost's global minimum), hence it fails exactly where that "
@@ -660,7 +660,7 @@ void summary(const Settings& s, double total_wall_s) {
   // ---------------------------------------------------------------- (a)
   md << "## (a) Speed against accuracy\n\nMedian over seeds; the answer of a method is its best-cost "
         "point; evaluations = full-cost equivalents (LM: one residual vector = one evaluation; its "
-        "numeric Jacobian costs 2n+1). Runs stop at 0.001 % max error, at the evaluation budget or "
+        "forward-difference Jacobian costs n+1). Runs stop at 0.001 % max error, at the evaluation budget or "
         "at the time limit. Curves: `speed_accuracy_<scene>.png` (seed 1).\n\n";
   {
     std::vector<std::string> scenes;
@@ -861,10 +861,16 @@ void summary(const Settings& s, double total_wall_s) {
         "SADE (jDE, rand/1/exp), population max(20, n), same restarts.\n"
         "- `bobyqa`: NLopt LN_BOBYQA from each start in turn (initial step = the initial distribution's "
         "spread) until the budget.\n"
-        "- `lm`: Ceres Levenberg-Marquardt (DENSE_QR, bounds), residuals = square roots of the "
-        "per-(particle, frame) cost terms (one CostFunction per 3-frame window: their sum is the global "
-        "cost), `DynamicNumericDiffCostFunction` with central differences, multi-start until the "
-        "budget.\n"
+        "- `lm`: Ceres Levenberg-Marquardt (DENSE_QR, bounds) on the cost's residuals "
+        "(`CostFunction::residuals`: predicted minus observed position, x y z per term, the form the "
+        "engine's own refinement uses), `DynamicNumericDiffCostFunction` with forward differences "
+        "(n + 1 evaluations per Jacobian), multi-start until the budget.\n"
+        "- `es_early` and `es_lm` are the engine with other settings only: the BOBYQA refinement "
+        "from generation " + std::to_string(bench::kEarlyRefineGeneration) + ", every " +
+        std::to_string(bench::kEarlyRefineGeneration) + " (`es_early`, speed part only), or the "
+        "Levenberg-Marquardt refinement (`refine_algorithm: levenberg_marquardt`) from generation " +
+        std::to_string(bench::kLmRefineGeneration) + ", every " +
+        std::to_string(bench::kLmRefineGeneration) + " (`es_lm`).\n"
         "- `lls`: equation error m a = sum k (l - L) u + c s u with a = (x(t+1) - 2 x(t) + x(t-1))/h^2, "
         "linear in (k, kL, c) per type, rows weighted by h^2/m (then its residual is exactly the "
         "one-step prediction error for substeps = 1), solved with Eigen's column-pivoting QR, "

@@ -328,23 +328,17 @@ RunResult runPagmo(const Problem& p, uint64_t seed, const Budget& budget, bool k
 
 // ---------------------------------------------------------------- Ceres Levenberg-Marquardt
 #ifdef MME_HAVE_CERES
-struct FrameResiduals {
+/// The cost's own residuals (CostFunction::residuals: predicted minus observed position, x y z
+/// per term), the same least-squares form the engine's Levenberg-Marquardt refinement uses.
+struct CostResiduals {
   const Problem* problem;
   Tracker* tracker;
   bool operator()(double const* const* parameters, double* residuals) const {
     const size_t n = problem->space->size();
     const std::vector<double> genes(parameters[0], parameters[0] + n);
-    const std::vector<double> values = problem->space->toPhysical(genes);
-    std::vector<double> local;
-    double total = 0.0;
-    size_t r = 0;
-    for (const auto& frame_cost : problem->frame_costs) {
-      frame_cost->evaluate(values, &local);
-      for (double c : local) {
-        residuals[r++] = std::sqrt(std::max(c, 0.0));
-        total += c;
-      }
-    }
+    thread_local std::vector<double> r;
+    const double total = problem->cost->residuals(problem->space->toPhysical(genes), &r);
+    std::copy(r.begin(), r.end(), residuals);
     tracker->counted(genes, total);
     return std::isfinite(total);
   }
@@ -363,13 +357,14 @@ RunResult runLm(const Problem& p, uint64_t seed, const Budget& budget, bool keep
   Tracker tracker(p, budget, keep_trace);
   Starts starts(p, seed);
   const size_t n = p.space->size();
-  const int residual_count = static_cast<int>(p.frame_costs.size()) * p.cost->numParticles();
+  const int residual_count = static_cast<int>(p.cost->residualCount());
   while (!tracker.done()) {
     std::vector<double> x = starts.next();
     ceres::Problem::Options problem_options;
     ceres::Problem problem(problem_options);
-    auto* cost = new ceres::DynamicNumericDiffCostFunction<FrameResiduals, ceres::CENTRAL>(
-        new FrameResiduals{&p, &tracker});
+    // Forward differences: n + 1 evaluations per Jacobian, as the engine's refinement.
+    auto* cost = new ceres::DynamicNumericDiffCostFunction<CostResiduals, ceres::FORWARD>(
+        new CostResiduals{&p, &tracker});
     cost->AddParameterBlock(static_cast<int>(n));
     cost->SetNumResiduals(residual_count);
     problem.AddResidualBlock(cost, nullptr, x.data());

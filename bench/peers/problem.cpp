@@ -38,23 +38,6 @@ mme::Model forgetFreeValues(mme::Model m) {
 
 namespace {
 
-/// Frames [t0, t0 + n) of a trajectory.
-mme::Trajectory sliceFrames(const mme::Trajectory& in, int t0, int n) {
-  mme::Trajectory out;
-  out.marker_names = in.marker_names;
-  out.frame_rate_hz = in.frame_rate_hz;
-  const int markers = in.numMarkers();
-  for (int t = t0; t < t0 + n; ++t) {
-    out.times_s.push_back(in.times_s[t]);
-    out.frame_numbers.push_back(in.frame_numbers[t]);
-    for (int i = 0; i < markers; ++i) {
-      out.positions_m.push_back(in.position(t, i));
-      out.occluded.push_back(in.occluded[t * markers + i]);
-    }
-  }
-  return out;
-}
-
 /// Why the equation-error least squares (linear in k, kL, c per type) does not apply; empty
 /// when it does.
 std::string llsVerdict(const mme::Model& model) {
@@ -114,14 +97,7 @@ Problem makeProblem(const std::string& name, const mme::Model& truth, int identi
   p.cost = std::make_shared<mme::CostFunction>(p.model, p.data);
   p.space = std::make_shared<mme::ParameterSpace>(p.model, p.data);
   p.truth_values = mme::getValues(truth, p.space->refs());
-  // Per-frame decomposition (a single frame is a static equilibrium: one window).
   const int frames = data.numFrames();
-  if (frames < 3) {
-    p.frame_costs.push_back(p.cost);
-  } else {
-    for (int t = 1; t + 1 < frames; ++t)
-      p.frame_costs.push_back(std::make_shared<mme::CostFunction>(p.model, sliceFrames(data, t - 1, 3)));
-  }
   // Rollout reference: 10 x the window (at least 100 frames); the limit is 10 x the larger of
   // the object's extent and the true motion's largest displacement over the same rollout.
   p.rollout_state = data_state;

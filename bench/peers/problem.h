@@ -33,9 +33,6 @@ struct Problem {
   std::shared_ptr<const mme::CostFunction> cost;
   std::shared_ptr<const mme::ParameterSpace> space;
   std::vector<double> truth_values;  ///< physical, in free-parameter order
-  /// Per-(particle, frame) decomposition of the same cost for least-squares methods: one cost
-  /// function per 3-frame window (t-1, t, t+1); the sum of their costs is the global cost.
-  std::vector<std::shared_ptr<const mme::CostFunction>> frame_costs;
   /// Starts: < 0 = the paper's initial distribution (ParameterSpace::sampleInitial, the same
   /// stream the engine draws its initial population from); >= 0 = the true genes plus a normal
   /// draw of this std as a share of each gene's range (the initial-guess-spread axis).

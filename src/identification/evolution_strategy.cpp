@@ -370,8 +370,7 @@ std::vector<double> EvolutionStrategy::refineWithNlopt(const Individual& start, 
   opt.set_initial_step(step);
   const uint64_t window = refineWindow();
   RefineContext ctx{cost_.get(), &space_, &opt, deadline_, window,
-                    options_.refine_stall_factor, start.cost};
-  ctx.best = start.cost;
+                    options_.refine_stall_factor, start.cost, 0, start.cost, {}};
   ctx.best_after.reserve(window);
   opt.set_min_objective(refineObjective, &ctx);
   const uint64_t max_evaluations = refineEvaluationLimit();
@@ -429,6 +428,11 @@ void EvolutionStrategy::refineBest() {
     LmResult result = levenbergMarquardt(*cost_, space_, start.genes, lm, pool_.get());
     calls = result.evaluations;
     x = std::move(result.genes);
+    if (result.jacobian_too_large) {
+      // A model too large for a stored Jacobian: BOBYQA instead (its memory is O(n^2)).
+      evaluations_ += calls;
+      x = refineWithNlopt(start, &calls);
+    }
   } else {
     x = refineWithNlopt(start, &calls);
   }

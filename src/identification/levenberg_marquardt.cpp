@@ -1,8 +1,10 @@
 #include "motion_model_estimation/identification/levenberg_marquardt.h"
 
 #include <Eigen/Dense>
+#include <Eigen/Sparse>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -38,12 +40,18 @@ LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& spac
     lo[k] = space.gene(k).lower;
     hi[k] = space.gene(k).upper;
   }
-  Eigen::MatrixXd jac(m, n);
+  // The Jacobian is stored by sparse columns: a gene moves only the terms of particles near its
+  // bond type's sites (the local-cost structure), and the other entries of a forward difference
+  // are exactly zero (the same arithmetic). That bounds memory on large models, and J^T J costs
+  // the sum over terms of (genes moving the term)^2 instead of terms x genes^2.
+  std::vector<std::vector<uint32_t>> rows(n);
+  std::vector<std::vector<double>> values(n);
+  std::atomic<uint64_t> stored{0};
+  std::atomic<bool> too_large{false};
   Eigen::VectorXd residual =
       Eigen::Map<const Eigen::VectorXd>(r0.data(), static_cast<Eigen::Index>(m));
   std::vector<double> x = start, trial(n), r_trial;
   std::vector<double> steps(n);
-  std::vector<char> column_ok(n);
   std::vector<double> cost_after{out.cost};  // the start, then after each Jacobian's step
   double mu = -1.0, nu = 2.0;
   const auto out_of_time = [&]() {
@@ -56,24 +64,43 @@ LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& spac
       if (x[k] + h > hi[k]) h = -h;
       steps[k] = h;
     }
+    stored = 0;
     const auto column = [&](size_t k) {
       thread_local std::vector<double> genes, rk;
       genes = x;
       genes[k] += steps[k];
       double ck = 0.0;
-      column_ok[k] = residualsAt(cost, space, genes, &rk, &ck);
-      if (!column_ok[k]) return;
-      for (size_t i = 0; i < m; ++i) jac(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) =
-          (rk[i] - residual[static_cast<Eigen::Index>(i)]) / steps[k];
+      rows[k].clear();
+      values[k].clear();
+      // A column whose model blew up is left empty: that gene is held this iteration.
+      if (!residualsAt(cost, space, genes, &rk, &ck)) return;
+      for (size_t i = 0; i < m; ++i) {
+        const double d = rk[i] - residual[static_cast<Eigen::Index>(i)];
+        if (d == 0.0) continue;
+        rows[k].push_back(static_cast<uint32_t>(i));
+        values[k].push_back(d / steps[k]);
+      }
+      if ((stored += rows[k].size()) > settings.max_jacobian_entries) too_large = true;
     };
     if (pool) pool->parallelFor(n, column);
     else for (size_t k = 0; k < n; ++k) column(k);
     out.evaluations += n;
     ++out.jacobians;
-    for (size_t k = 0; k < n; ++k)
-      if (!column_ok[k]) jac.col(static_cast<Eigen::Index>(k)).setZero();  // blew up: hold it
-
-    const Eigen::MatrixXd jtj = jac.transpose() * jac;
+    if (too_large) {
+      out.jacobian_too_large = true;
+      break;
+    }
+    Eigen::SparseMatrix<double> jac(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(n));
+    {
+      Eigen::VectorXi per_column(static_cast<Eigen::Index>(n));
+      for (size_t k = 0; k < n; ++k) per_column[static_cast<Eigen::Index>(k)] = static_cast<int>(rows[k].size());
+      jac.reserve(per_column);
+      for (size_t k = 0; k < n; ++k)
+        for (size_t e = 0; e < rows[k].size(); ++e)
+          jac.insert(static_cast<Eigen::Index>(rows[k][e]), static_cast<Eigen::Index>(k)) = values[k][e];
+      jac.makeCompressed();
+    }
+    const Eigen::MatrixXd jtj = Eigen::MatrixXd(Eigen::SparseMatrix<double>(jac.transpose() * jac));
     const Eigen::VectorXd g = jac.transpose() * residual;
     Eigen::VectorXd scale = jtj.diagonal().cwiseMax(1e-30 * std::max(jtj.diagonal().maxCoeff(), 1e-300));
     if (mu < 0.0) mu = 1e-3;

@@ -253,6 +253,15 @@ TEST(LevenbergMarquardt, ConvergesInAFewJacobiansInsideItsLimitsAndBounds) {
   EXPECT_LE(mme::levenbergMarquardt(*f.cost, space, start, few, nullptr).evaluations,
             few.max_evaluations);
 
+  // A Jacobian beyond the memory cap: it stops after computing it, at the start.
+  mme::LmSettings small;
+  small.max_jacobian_entries = 10;
+  const mme::LmResult refused = mme::levenbergMarquardt(*f.cost, space, start, small, nullptr);
+  EXPECT_TRUE(refused.jacobian_too_large);
+  EXPECT_EQ(refused.genes, start);
+  EXPECT_EQ(refused.evaluations, n + 1);
+  EXPECT_FALSE(one.jacobian_too_large);
+
   // The first type's stiffness (true 20 N/m) capped at 15: the answer sits on that bound.
   mme::Model capped = f.search;
   capped.bond_types[0].param(mme::kStiffness).max = 15.0;

@@ -23,6 +23,9 @@ struct LmSettings {
   double stall_factor = 1.01;
   int stall_iterations = 3;
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
+  /// Most non-zero Jacobian entries kept (12 bytes each: 10^8 = 1.2 GB); beyond it the
+  /// refinement stops rather than exhaust memory (LmResult::jacobian_too_large).
+  uint64_t max_jacobian_entries = 100000000;
 };
 
 struct LmResult {
@@ -30,6 +33,9 @@ struct LmResult {
   double cost = 0.0;          ///< its global cost [m^2]
   uint64_t evaluations = 0;   ///< residual evaluations (each = one full-cost evaluation)
   int jacobians = 0;
+  /// The Jacobian's non-zero entries exceeded max_jacobian_entries: stopped there, keeping the
+  /// best point so far (the caller may fall back to a derivative-free search).
+  bool jacobian_too_large = false;
 };
 
 /// Minimises cost(space.toPhysical(genes)) from `start` (inside the bounds). `pool` may be null
