@@ -112,6 +112,7 @@ struct Settings {
   int refine_start = -1;     // -1 = engine default
   int refine_period = -1;
   int refine_evaluations = -1;
+  std::string refine;        // "" = engine default (bobyqa)
   uint64_t seed = 1;
   bool wants(const std::string& name) const {
     return only.empty() || ("," + only + ",").find("," + name + ",") != std::string::npos;
@@ -136,6 +137,7 @@ mme::IdentifyOptions esOptions(const Settings& s, int generations) {
   if (s.refine_start >= 0) o.es.refine_start_generation = s.refine_start;
   if (s.refine_period >= 0) o.es.refine_period = s.refine_period;
   if (s.refine_evaluations >= 0) o.es.refine_max_evaluations = s.refine_evaluations;
+  if (!s.refine.empty()) o.es.refine_algorithm = s.refine;
   o.es.threads = s.threads;
   o.es.seed = s.seed;
   return o;
@@ -265,12 +267,13 @@ int main(int argc, char** argv) {
       else if (a == "--refine-start" && i + 1 < argc) s.refine_start = std::atoi(argv[++i]);
       else if (a == "--refine-period" && i + 1 < argc) s.refine_period = std::atoi(argv[++i]);
       else if (a == "--refine-evaluations" && i + 1 < argc) s.refine_evaluations = std::atoi(argv[++i]);
+      else if (a == "--refine" && i + 1 < argc) s.refine = argv[++i];
       else if (a == "--seed" && i + 1 < argc) s.seed = std::strtoull(argv[++i], nullptr, 10);
       else {
         std::fprintf(stderr, "usage: bench_paper [--quick] [--out-dir DIR] [--threads T] "
                              "[--only fig1,table1,table2,scaling,random18]\n"
                              "       [--generations N] [--refine-start G] [--refine-period G]\n"
-                             "       [--refine-evaluations E] [--seed S]\n"
+                             "       [--refine-evaluations E] [--refine ALGORITHM] [--seed S]\n"
                              "       bench_paper compare TRUTH.yaml ESTIMATE.yaml\n");
         return 2;
       }

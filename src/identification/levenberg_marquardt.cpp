@@ -34,6 +34,10 @@ LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& spac
   if (!residualsAt(cost, space, start, &r0, &out.cost)) out.cost = std::numeric_limits<double>::infinity();
   out.evaluations = 1;
   if (n == 0 || m == 0 || !std::isfinite(out.cost)) return out;
+  if (m > std::numeric_limits<uint32_t>::max()) {  // row indices are stored in 32 bits
+    out.jacobian_too_large = true;
+    return out;
+  }
 
   std::vector<double> lo(n), hi(n);
   for (size_t k = 0; k < n; ++k) {
