@@ -105,10 +105,14 @@ Individual EvolutionStrategy::makeRandom(FastRandom& rng) const {
   return ind;
 }
 
-void EvolutionStrategy::forEach(size_t count, const std::function<void(size_t)>& body) {
+ThreadPool* EvolutionStrategy::threadPool() {
   if (options_.threads > 1 && !pool_) pool_ = std::make_unique<ThreadPool>(options_.threads);
-  if (pool_) {
-    pool_->parallelFor(count, body);
+  return pool_.get();
+}
+
+void EvolutionStrategy::forEach(size_t count, const std::function<void(size_t)>& body) {
+  if (ThreadPool* pool = threadPool()) {
+    pool->parallelFor(count, body);
   } else {
     for (size_t i = 0; i < count; ++i) body(i);
   }
@@ -424,8 +428,7 @@ void EvolutionStrategy::refineBest() {
     if (lm.max_evaluations < n + 2) return;  // not even one Jacobian and step
     lm.stall_factor = options_.refine_stall_factor;
     lm.deadline = deadline_;
-    if (options_.threads > 1 && !pool_) pool_ = std::make_unique<ThreadPool>(options_.threads);
-    LmResult result = levenbergMarquardt(*cost_, space_, start.genes, lm, pool_.get());
+    LmResult result = levenbergMarquardt(*cost_, space_, start.genes, lm, threadPool());
     calls = result.evaluations;
     x = std::move(result.genes);
     if (result.jacobian_too_large) {

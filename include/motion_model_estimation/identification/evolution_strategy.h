@@ -115,6 +115,8 @@ class EvolutionStrategy {
   Individual makeChild(Operator* op, FastRandom& rng) const;
   void mutateGenes(Individual* child, const std::vector<int>& genes, FastRandom& rng) const;
   void evaluateOne(Individual* individual) const;
+  /// The pool of options_.threads threads, started on first use (null for one thread).
+  ThreadPool* threadPool();
   void forEach(size_t count, const std::function<void(size_t)>& body);
   void select(std::vector<Individual>* children, const std::vector<Operator>& ops);
   void refineBest();
