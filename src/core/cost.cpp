@@ -162,6 +162,19 @@ struct CostFunction::Impl {
       }
     }
   }
+
+  /// evaluate() and residuals(): every frame on the calling thread, in its own workspace.
+  double evaluateAll(const std::vector<double>& values, std::vector<double>* local_costs,
+                     double* residuals) const {
+    thread_local Workspace ws;
+    prepareLaws(values, &ws);
+    std::vector<double>& local = local_costs ? *local_costs : ws.local;
+    local.assign(n, 0.0);
+    run(ws.laws, ws.inter_laws.data(), 0, frames.size(), &ws, local.data(), residuals);
+    double total = 0.0;
+    for (double c : local) total += c;
+    return total;
+  }
 };
 
 CostFunction::CostFunction(const Model& model, const Trajectory& trajectory)
@@ -401,29 +414,13 @@ const std::vector<ParamRef>& CostFunction::freeParameters() const { return impl_
 
 double CostFunction::evaluate(const std::vector<double>& free_values,
                               std::vector<double>* local_costs) const {
-  thread_local Workspace ws;
-  const Impl& m = *impl_;
-  m.prepareLaws(free_values, &ws);
-  std::vector<double>& local = local_costs ? *local_costs : ws.local;
-  local.assign(m.n, 0.0);
-  m.run(ws.laws, ws.inter_laws.data(), 0, m.frames.size(), &ws, local.data());
-  double total = 0.0;
-  for (double c : local) total += c;
-  return total;
+  return impl_->evaluateAll(free_values, local_costs, nullptr);
 }
 
 double CostFunction::residuals(const std::vector<double>& free_values,
                                std::vector<double>* residuals) const {
-  thread_local Workspace ws;
-  const Impl& m = *impl_;
-  m.prepareLaws(free_values, &ws);
-  ws.local.assign(m.n, 0.0);
-  residuals->assign(residualCount(), 0.0);
-  m.run(ws.laws, ws.inter_laws.data(), 0, m.frames.size(), &ws, ws.local.data(),
-        residuals->data());
-  double total = 0.0;
-  for (double c : ws.local) total += c;
-  return total;
+  residuals->resize(residualCount());  // run() writes every entry
+  return impl_->evaluateAll(free_values, nullptr, residuals->data());
 }
 
 size_t CostFunction::residualCount() const { return 3 * impl_->valid.size(); }
