@@ -501,6 +501,17 @@ const std::map<std::string, std::string>& failureReasons() {
   return reasons;
 }
 
+/// An engine variant as the targets table names it: its refinement settings.
+std::string engineLabel(const std::string& method) {
+  auto schedule = [](const char* algorithm, int generation) {
+    const std::string g = std::to_string(generation);
+    return std::string(" (") + algorithm + " refinement from generation " + g + ", every " + g + ")";
+  };
+  if (method == "es_early") return method + schedule("BOBYQA", bench::kEarlyRefineGeneration);
+  if (method == "es_lm") return method + schedule("Levenberg-Marquardt", bench::kLmRefineGeneration);
+  return method;
+}
+
 void summary(const Settings& s, double total_wall_s) {
   const std::vector<std::string> order = bench::allMethods();
   std::ostringstream md;
@@ -552,12 +563,7 @@ void summary(const Settings& s, double total_wall_s) {
     const double er = median(ev_ratio), wr = median(wall_ratio);
     const std::string pre = lower_bound ? ">= " : "";
     auto ratio = [&pre](double x) { return std::isfinite(x) ? pre + num(x, "%.3g") + "x" : std::string("n/a"); };
-    const std::string who =
-        engine == "es_local" ? "es_local"
-        : engine == "es_early" ? "es_early (BOBYQA from generation " +
-                                     std::to_string(bench::kEarlyRefineGeneration) + ")"
-                               : "es_lm (Levenberg-Marquardt from generation " +
-                                     std::to_string(bench::kLmRefineGeneration) + ")";
+    const std::string who = engineLabel(engine);
     md << "| " << who << " reaches 0.01 % on paper_object with >= 10x fewer evaluations than CMA-ES | "
        << (pairs ? ratio(er) + " (median over " + std::to_string(ev_ratio.size()) + " seeds; " + engine +
                        " reached 0.01 % in " + std::to_string(es_ok) + "/" + std::to_string(pairs) +
@@ -621,10 +627,7 @@ void summary(const Settings& s, double total_wall_s) {
         gens_csv << u << "," << m << "," << n << "," << succ[m][u] << "," << num(median(gens[m][u]))
                  << "," << num(median(evals[m][u])) << "\n";
     for (const std::string& m : {std::string("es_local"), std::string("es_lm")}) {
-      const std::string who =
-          m == "es_local" ? "es_local" : "es_lm (Levenberg-Marquardt refinement from generation " +
-                                             std::to_string(bench::kLmRefineGeneration) + ", every " +
-                                             std::to_string(bench::kLmRefineGeneration) + ")";
+      const std::string who = engineLabel(m);
       if (m != "es_local" && seeds[m].empty()) continue;
       md << "| " << who << " generations to converge (max error < 1 %) stay within 1.5x from 10 to "
             "200 unknowns | unknowns: median generations (successes/seeds): "
