@@ -210,7 +210,7 @@ void speedAccuracy(const Settings& s, const std::vector<std::string>& methods) {
   } else {
     scenes.push_back({"paper_object", 5, {150000, 90.0, stop}, [] { return paperProblem(kPaperFrames); }, true});
     scenes.push_back({"provot_cloth", 1, {15000, 40.0, stop}, [] { return clothProblem(); }, false});
-    scenes.push_back({"fluid_jet_reduced", 1, {2500, 40.0, stop}, [] { return fluidProblem(10, 8); }, false});
+    scenes.push_back({"fluid_jet_reduced", 5, {2500, 40.0, stop}, [] { return fluidProblem(10, 8); }, false});
     scenes.push_back({"cable_object", 2, {100000, 30.0, stop}, [] { return cableProblem(5, 100, 7); }, false});
   }
   std::FILE* runs = openCsv(s, "speed_accuracy_runs.csv",

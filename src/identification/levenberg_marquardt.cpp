@@ -1,7 +1,6 @@
 #include "motion_model_estimation/identification/levenberg_marquardt.h"
 
 #include <Eigen/Dense>
-#include <Eigen/Sparse>
 
 #include <algorithm>
 #include <atomic>
@@ -19,7 +18,76 @@ bool residualsAt(const CostFunction& cost, const ParameterSpace& space,
   return std::isfinite(*c);
 }
 
+/// The next damped Gauss-Newton step at a point with residual `residual`, predicted with an
+/// earlier Jacobian (J^T J + damping = `jtj` + diag(`damping`)).
+Eigen::VectorXd nextStep(const detail::JacobianColumns& jac, const Eigen::VectorXd& residual,
+                         const Eigen::MatrixXd& jtj, const Eigen::VectorXd& damping) {
+  Eigen::MatrixXd a = jtj;
+  a.diagonal() += damping;
+  return a.ldlt().solve(-jac.gradient(residual));
+}
+
 }  // namespace
+
+namespace detail {
+
+size_t JacobianColumns::nonZeros() const {
+  size_t stored = 0;
+  for (const auto& column : rows) stored += column.size();
+  return stored;
+}
+
+Eigen::VectorXd JacobianColumns::gradient(const Eigen::VectorXd& residual) const {
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(rows.size()));
+  for (size_t k = 0; k < rows.size(); ++k)
+    for (size_t e = 0; e < rows[k].size(); ++e)
+      g[static_cast<Eigen::Index>(k)] += values[k][e] * residual[rows[k][e]];
+  return g;
+}
+
+void normalEquations(const JacobianColumns& jac, const Eigen::VectorXd& residual,
+                     Eigen::MatrixXd* jtj, Eigen::VectorXd* g, NormalEquationsPath path) {
+  const size_t n = jac.rows.size();
+  const size_t m = jac.rows_count;
+  const auto ni = static_cast<Eigen::Index>(n);
+  *g = jac.gradient(residual);
+  const size_t stored = jac.nonZeros();
+  jtj->setZero(ni, ni);
+  constexpr size_t kDenseEntryLimit = size_t{1} << 23;  // 64 MB of doubles
+  if (path == NormalEquationsPath::kAuto)
+    path = 4 * stored >= m * n && m * n <= kDenseEntryLimit ? NormalEquationsPath::kDense
+                                                             : NormalEquationsPath::kSparse;
+  if (path == NormalEquationsPath::kDense) {
+    Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m), ni);
+    for (size_t k = 0; k < n; ++k)
+      for (size_t e = 0; e < jac.rows[k].size(); ++e)
+        dense(jac.rows[k][e], static_cast<Eigen::Index>(k)) = jac.values[k][e];
+    jtj->selfadjointView<Eigen::Lower>().rankUpdate(dense.transpose());
+  } else {
+    // Transpose the columns into rows (a counting sort: each row's genes stay ascending),
+    // then add each row's outer product to the lower triangle.
+    std::vector<size_t> start(m + 1, 0);
+    for (const auto& column : jac.rows)
+      for (uint32_t i : column) ++start[i + 1];
+    for (size_t i = 0; i < m; ++i) start[i + 1] += start[i];
+    std::vector<uint32_t> gene(stored);
+    std::vector<double> value(stored);
+    std::vector<size_t> fill(start.begin(), start.end() - 1);
+    for (size_t k = 0; k < n; ++k)
+      for (size_t e = 0; e < jac.rows[k].size(); ++e) {
+        const size_t slot = fill[jac.rows[k][e]]++;
+        gene[slot] = static_cast<uint32_t>(k);
+        value[slot] = jac.values[k][e];
+      }
+    for (size_t i = 0; i < m; ++i)
+      for (size_t a = start[i]; a < start[i + 1]; ++a)
+        for (size_t b = start[i]; b <= a; ++b) (*jtj)(gene[a], gene[b]) += value[a] * value[b];
+  }
+  Eigen::MatrixXd full = jtj->selfadjointView<Eigen::Lower>();
+  *jtj = std::move(full);
+}
+
+}  // namespace detail
 
 LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& space,
                             const std::vector<double>& start, const LmSettings& settings,
@@ -48,8 +116,10 @@ LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& spac
   // bond type's sites (the local-cost structure), and the other entries of a forward difference
   // are exactly zero (the same arithmetic). That bounds memory on large models, and J^T J costs
   // the sum over terms of (genes moving the term)^2 instead of terms x genes^2.
-  std::vector<std::vector<uint32_t>> rows(n);
-  std::vector<std::vector<double>> values(n);
+  detail::JacobianColumns jac;
+  jac.rows_count = m;
+  jac.rows.resize(n);
+  jac.values.resize(n);
   std::atomic<uint64_t> stored{0};
   std::atomic<bool> too_large{false};
   Eigen::VectorXd residual =
@@ -74,17 +144,19 @@ LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& spac
       genes = x;
       genes[k] += steps[k];
       double ck = 0.0;
-      rows[k].clear();
-      values[k].clear();
+      std::vector<uint32_t>& rows = jac.rows[k];
+      std::vector<double>& values = jac.values[k];
+      rows.clear();
+      values.clear();
       // A column whose model blew up is left empty: that gene is held this iteration.
       if (!residualsAt(cost, space, genes, &rk, &ck)) return;
       for (size_t i = 0; i < m; ++i) {
         const double d = rk[i] - residual[static_cast<Eigen::Index>(i)];
         if (d == 0.0) continue;
-        rows[k].push_back(static_cast<uint32_t>(i));
-        values[k].push_back(d / steps[k]);
+        rows.push_back(static_cast<uint32_t>(i));
+        values.push_back(d / steps[k]);
       }
-      if ((stored += rows[k].size()) > settings.max_jacobian_entries) too_large = true;
+      if ((stored += rows.size()) > settings.max_jacobian_entries) too_large = true;
     };
     if (pool) pool->parallelFor(n, column);
     else for (size_t k = 0; k < n; ++k) column(k);
@@ -94,22 +166,14 @@ LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& spac
       out.jacobian_too_large = true;
       break;
     }
-    Eigen::SparseMatrix<double> jac(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(n));
-    {
-      Eigen::VectorXi per_column(static_cast<Eigen::Index>(n));
-      for (size_t k = 0; k < n; ++k) per_column[static_cast<Eigen::Index>(k)] = static_cast<int>(rows[k].size());
-      jac.reserve(per_column);
-      for (size_t k = 0; k < n; ++k)
-        for (size_t e = 0; e < rows[k].size(); ++e)
-          jac.insert(static_cast<Eigen::Index>(rows[k][e]), static_cast<Eigen::Index>(k)) = values[k][e];
-      jac.makeCompressed();
-    }
-    const Eigen::MatrixXd jtj = Eigen::MatrixXd(Eigen::SparseMatrix<double>(jac.transpose() * jac));
-    const Eigen::VectorXd g = jac.transpose() * residual;
+    Eigen::MatrixXd jtj;
+    Eigen::VectorXd g;
+    detail::normalEquations(jac, residual, &jtj, &g);
     Eigen::VectorXd scale = jtj.diagonal().cwiseMax(1e-30 * std::max(jtj.diagonal().maxCoeff(), 1e-300));
     if (mu < 0.0) mu = 1e-3;
     // Damped steps until one lowers the cost (Nielsen's update of the damping).
     bool accepted = false;
+    double rho = 0.0;
     while (!accepted && out.evaluations < max_evaluations && !out_of_time()) {
       Eigen::MatrixXd a = jtj;
       a.diagonal() += mu * scale;
@@ -132,7 +196,7 @@ LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& spac
       if (ok && c_trial < out.cost) {
         // Gain ratio against the linear model's predicted decrease.
         const double predicted = dx.dot(mu * scale.cwiseProduct(dx) - g);
-        const double rho = predicted > 0.0 ? (out.cost - c_trial) / predicted : 0.0;
+        rho = predicted > 0.0 ? (out.cost - c_trial) / predicted : 0.0;
         mu *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
         nu = 2.0;
         x = trial;
@@ -146,6 +210,20 @@ LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& spac
       }
     }
     if (!accepted) break;
+    if (settings.step_tolerance > 0.0 && std::fabs(rho - 1.0) < 0.25) {
+      // The linear model predicted this step well; if the step it predicts next (with this
+      // Jacobian, at the new point) moves no gene by more than the tolerance, the search has
+      // converged (to round-off on exact data, to the optimum on noisy data): stop without
+      // paying for another Jacobian to find out.
+      const Eigen::VectorXd next = nextStep(jac, residual, jtj, mu * scale);
+      bool small = next.allFinite();
+      for (size_t k = 0; k < n && small; ++k)
+        small = std::fabs(next[static_cast<Eigen::Index>(k)]) <= settings.step_tolerance * (hi[k] - lo[k]);
+      if (small) {
+        out.converged = true;
+        break;
+      }
+    }
     cost_after.push_back(out.cost);
     const size_t iterations = cost_after.size() - 1;
     const size_t w = static_cast<size_t>(std::max(settings.stall_iterations, 1));

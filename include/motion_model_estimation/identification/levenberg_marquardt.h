@@ -10,6 +10,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "motion_model_estimation/core/cost.h"
 #include "motion_model_estimation/core/thread_pool.h"
 #include "motion_model_estimation/identification/parameter_space.h"
@@ -22,6 +24,9 @@ struct LmSettings {
   /// to a noisy optimum or crawling); 0: stop after `stall_iterations` Jacobians.
   double stall_factor = 1.01;
   int stall_iterations = 3;
+  /// Converged when, after a step the linear model predicted well, the next step it predicts
+  /// (with the same Jacobian) moves no gene by more than this share of its range; 0: off.
+  double step_tolerance = 1e-10;
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
   /// Most non-zero Jacobian entries kept (12 bytes each: 10^8 = 1.2 GB); beyond it the
   /// refinement stops rather than exhaust memory (LmResult::jacobian_too_large).
@@ -33,10 +38,37 @@ struct LmResult {
   double cost = 0.0;          ///< its global cost [m^2]
   uint64_t evaluations = 0;   ///< residual evaluations (each = one full-cost evaluation)
   int jacobians = 0;
+  /// Stopped on the step tolerance (converged) rather than on a stall, a limit or the deadline.
+  bool converged = false;
   /// The Jacobian's non-zero entries exceeded max_jacobian_entries: stopped there, keeping the
   /// best point so far (the caller may fall back to a derivative-free search).
   bool jacobian_too_large = false;
 };
+
+namespace detail {
+
+/// A Jacobian (m rows x n genes) by sparse columns: the row indices of each column ascending and
+/// its non-zero values. The forward differences of a gene are exactly zero on the terms it does
+/// not move, so a large model's Jacobian is mostly absent.
+struct JacobianColumns {
+  size_t rows_count = 0;                      ///< m
+  std::vector<std::vector<uint32_t>> rows;    ///< per gene
+  std::vector<std::vector<double>> values;    ///< per gene, same length as rows[k]
+  size_t nonZeros() const;
+  /// J^T r.
+  Eigen::VectorXd gradient(const Eigen::VectorXd& residual) const;
+};
+
+enum class NormalEquationsPath { kAuto, kDense, kSparse };
+
+/// J^T J (dense n x n, symmetric) and J^T r. kAuto: a dense m x n matrix and Eigen's blocked
+/// product when at least a quarter of J is stored (and m x n fits in 64 MB), else the outer
+/// products of J's rows (cost: the sum over rows of their non-zeros squared).
+void normalEquations(const JacobianColumns& jac, const Eigen::VectorXd& residual,
+                     Eigen::MatrixXd* jtj, Eigen::VectorXd* g,
+                     NormalEquationsPath path = NormalEquationsPath::kAuto);
+
+}  // namespace detail
 
 /// Minimises cost(space.toPhysical(genes)) from `start` (inside the bounds). `pool` may be null
 /// (one thread).
