@@ -60,6 +60,8 @@ struct Settings {
   int seeds_200 = 3;  ///< seeds of the 200-unknown setting (see the summary's notes)
   std::string only;   ///< speed,map,scaling (empty = all)
   std::vector<std::string> methods;
+  std::vector<std::string> scenes;  ///< speed part: these scenes only (empty = all)
+  int speed_seeds = 0;              ///< speed part: seeds per scene (0 = each scene's own)
   bool wants(const std::string& part) const {
     return only.empty() || ("," + only + ",").find("," + part + ",") != std::string::npos;
   }
@@ -193,6 +195,9 @@ Problem mapProblem(const std::string& axis, double value, int seed, int frames) 
 }
 
 // ====================================================================== (a) speed vs accuracy
+/// Runs timed alone that take less than this are timed three times (median kept) [s].
+constexpr double kRetimeBelowS = 1.0;
+
 struct SpeedScene {
   std::string name;
   int seeds;
@@ -238,6 +243,16 @@ void speedAccuracy(const Settings& s, const std::vector<std::string>& methods) {
     std::fflush(runs);
     std::fflush(trace);
   };
+  if (!s.scenes.empty()) {
+    for (const std::string& name : s.scenes)
+      if (std::none_of(scenes.begin(), scenes.end(), [&](const SpeedScene& sc) { return sc.name == name; }))
+        throw mme::InputError("--scenes: no speed scene '" + name + "' in this mode");
+    scenes.erase(std::remove_if(scenes.begin(), scenes.end(), [&](const SpeedScene& sc) {
+      return std::find(s.scenes.begin(), s.scenes.end(), sc.name) == s.scenes.end();
+    }), scenes.end());
+  }
+  if (s.speed_seeds > 0)
+    for (SpeedScene& sc : scenes) sc.seeds = s.speed_seeds;
   for (int pass = 0; pass < 2; ++pass) {  // pass 0: timed alone; pass 1: the others, in parallel
     std::vector<std::function<void()>> jobs;
     for (const SpeedScene& sc : scenes) {
@@ -248,8 +263,23 @@ void speedAccuracy(const Settings& s, const std::vector<std::string>& methods) {
           problem->lls_applicable ? "applies" : ("n/a: " + problem->lls_reason).c_str());
       for (int seed = 1; seed <= sc.seeds; ++seed)
         for (const std::string& m : methods)
-          jobs.push_back([&, problem, sc, seed, m]() {
-            const RunResult r = bench::runMethod(m, *problem, seed, sc.budget, seed == 1);
+          jobs.push_back([&, problem, sc, seed, m, pass]() {
+            RunResult r = bench::runMethod(m, *problem, seed, sc.budget, seed == 1);
+            if (pass == 0 && r.wall_s < kRetimeBelowS) {
+              // A run this short is timed by a machine whose speed swings between moments: run
+              // it twice more (the same seed gives the same run) and keep the median-time one.
+              std::vector<RunResult> runs;
+              runs.push_back(std::move(r));
+              for (int k = 0; k < 2; ++k) runs.push_back(bench::runMethod(m, *problem, seed, sc.budget, seed == 1));
+              for (const RunResult& other : runs)
+                if (other.evaluations != runs[0].evaluations || other.cost != runs[0].cost)
+                  say("(a) warning: %s seed %d %s: repeated runs differ (%llu vs %llu evaluations)\n",
+                      sc.name.c_str(), seed, m.c_str(), static_cast<unsigned long long>(other.evaluations),
+                      static_cast<unsigned long long>(runs[0].evaluations));
+              std::sort(runs.begin(), runs.end(),
+                        [](const RunResult& a, const RunResult& b) { return a.wall_s < b.wall_s; });
+              r = std::move(runs[1]);
+            }
             say("(a) %s seed %d %-9s max error %10s %%  median %10s %%  %8llu evals %7.2f s  %s\n",
                 sc.name.c_str(), seed, m.c_str(), num(r.errors.max, "%.3g").c_str(),
                 num(r.errors.median, "%.3g").c_str(), static_cast<unsigned long long>(r.evaluations),
@@ -664,7 +694,9 @@ void summary(const Settings& s, double total_wall_s) {
   md << "## (a) Speed against accuracy\n\nMedian over seeds; the answer of a method is its best-cost "
         "point; evaluations = full-cost equivalents (LM: one residual vector = one evaluation; its "
         "forward-difference Jacobian costs n+1). Runs stop at 0.001 % max error, at the evaluation budget or "
-        "at the time limit. Curves: `speed_accuracy_<scene>.png` (seed 1).\n\n";
+        "at the time limit. paper_object is timed alone (no other job on the machine), and its runs "
+        "under 1 s are timed three times (the same seed gives the same run), the median time kept. "
+        "Curves: `speed_accuracy_<scene>.png` (seed 1).\n\n";
   {
     std::vector<std::string> scenes;
     for (const Row& r : sa)
@@ -905,10 +937,13 @@ int main(int argc, char** argv) {
       else if (a == "--seeds") s.seeds = std::max(1, std::atoi(value().c_str()));
       else if (a == "--seeds-200") s.seeds_200 = std::max(1, std::atoi(value().c_str()));
       else if (a == "--only") s.only = value();
-      else if (a == "--methods") {
+      else if (a == "--methods" || a == "--scenes") {
         std::stringstream ss(value());
         std::string m;
-        while (std::getline(ss, m, ',')) s.methods.push_back(m);
+        while (std::getline(ss, m, ',')) (a == "--methods" ? s.methods : s.scenes).push_back(m);
+      } else if (a == "--speed-seeds") {
+        s.speed_seeds = std::atoi(value().c_str());
+        if (s.speed_seeds < 1) throw mme::InputError("--speed-seeds must be a positive integer");
       } else if (a == "--list-methods") {
         for (const std::string& m : bench::availableMethods()) std::printf("%s\n", m.c_str());
         return 0;
@@ -916,7 +951,7 @@ int main(int argc, char** argv) {
         std::fprintf(stderr,
                      "usage: bench_peers [--quick] [--out DIR] [--workers N] [--seeds N] [--seeds-200 N]\n"
                      "                   [--only speed,map,scaling] [--methods a,b,...] [--summary-only]\n"
-                     "                   [--list-methods]\n");
+                     "                   [--scenes a,b,...] [--speed-seeds N] [--list-methods]\n");
         return 2;
       }
     }
