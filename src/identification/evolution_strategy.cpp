@@ -420,9 +420,9 @@ void EvolutionStrategy::refineBest() {
   uint64_t calls = 0;
   std::vector<double> x;
   if (options_.refine_algorithm == "levenberg_marquardt") {
-    // The cost is a sum of squares: Gauss-Newton steps on its residuals. Same stopping rule
-    // as BOBYQA's, counted in Jacobians (3 in a row that do not divide the cost by the
-    // stall factor), same evaluation limits and deadline.
+    // The cost is a sum of squares: Gauss-Newton steps on its residuals. BOBYQA's stall rule
+    // counted in Jacobians (3 in a row that do not divide the cost by the stall factor), its
+    // evaluation limits and deadline, and a step tolerance (LmSettings) for convergence.
     LmSettings lm;
     lm.max_evaluations = refineEvaluationLimit();
     if (lm.max_evaluations < n + 2) return;  // not even one Jacobian and step
@@ -432,9 +432,18 @@ void EvolutionStrategy::refineBest() {
     calls = result.evaluations;
     x = std::move(result.genes);
     if (result.jacobian_too_large) {
-      // A model too large for a stored Jacobian: BOBYQA instead (its memory is O(n^2)).
-      evaluations_ += calls;
-      x = refineWithNlopt(start, &calls);
+      // A model too large for a stored Jacobian: BOBYQA instead (its memory is O(n^2)), from
+      // the best point the Levenberg-Marquardt steps reached before the Jacobian outgrew the cap.
+      Individual from = start;
+      if (result.cost < start.cost) {
+        from.genes = x;
+        from.cost = result.cost;
+      }
+      evaluations_ += calls;  // counted against BOBYQA's limit, then as this refinement's
+      uint64_t bobyqa_calls = 0;
+      x = refineWithNlopt(from, &bobyqa_calls);
+      evaluations_ -= calls;
+      calls += bobyqa_calls;
     }
   } else {
     x = refineWithNlopt(start, &calls);
