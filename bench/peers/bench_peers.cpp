@@ -206,7 +206,9 @@ struct SpeedScene {
   bool sequential;  ///< timed alone (no other benchmark job on the machine)
 };
 
-void speedAccuracy(const Settings& s, const std::vector<std::string>& methods) {
+/// The speed part's scenes for this mode, narrowed by --scenes (an unknown name: InputError)
+/// and with --speed-seeds applied.
+std::vector<SpeedScene> speedScenes(const Settings& s) {
   std::vector<SpeedScene> scenes;
   const double stop = 0.001;  // stop once max error < 0.001 % (past the 0.01 % milestone)
   if (s.quick) {
@@ -218,6 +220,21 @@ void speedAccuracy(const Settings& s, const std::vector<std::string>& methods) {
     scenes.push_back({"fluid_jet_reduced", 5, {2500, 40.0, stop}, [] { return fluidProblem(10, 8); }, false});
     scenes.push_back({"cable_object", 2, {100000, 30.0, stop}, [] { return cableProblem(5, 100, 7); }, false});
   }
+  if (!s.scenes.empty()) {
+    for (const std::string& name : s.scenes)
+      if (std::none_of(scenes.begin(), scenes.end(), [&](const SpeedScene& sc) { return sc.name == name; }))
+        throw mme::InputError("--scenes: no speed scene '" + name + "' in this mode");
+    scenes.erase(std::remove_if(scenes.begin(), scenes.end(), [&](const SpeedScene& sc) {
+      return std::find(s.scenes.begin(), s.scenes.end(), sc.name) == s.scenes.end();
+    }), scenes.end());
+  }
+  if (s.speed_seeds > 0)
+    for (SpeedScene& sc : scenes) sc.seeds = s.speed_seeds;
+  return scenes;
+}
+
+void speedAccuracy(const Settings& s, const std::vector<std::string>& methods) {
+  const std::vector<SpeedScene> scenes = speedScenes(s);
   std::FILE* runs = openCsv(s, "speed_accuracy_runs.csv",
       "scene,method,seed,unknowns,applicable,evaluations,wall_s,median_error_pct,max_error_pct,cost,"
       "evals_to_1pct,wall_to_1pct,evals_to_0.01pct,wall_to_0.01pct,generations,restarts,bounded,note");
@@ -243,16 +260,6 @@ void speedAccuracy(const Settings& s, const std::vector<std::string>& methods) {
     std::fflush(runs);
     std::fflush(trace);
   };
-  if (!s.scenes.empty()) {
-    for (const std::string& name : s.scenes)
-      if (std::none_of(scenes.begin(), scenes.end(), [&](const SpeedScene& sc) { return sc.name == name; }))
-        throw mme::InputError("--scenes: no speed scene '" + name + "' in this mode");
-    scenes.erase(std::remove_if(scenes.begin(), scenes.end(), [&](const SpeedScene& sc) {
-      return std::find(s.scenes.begin(), s.scenes.end(), sc.name) == s.scenes.end();
-    }), scenes.end());
-  }
-  if (s.speed_seeds > 0)
-    for (SpeedScene& sc : scenes) sc.seeds = s.speed_seeds;
   for (int pass = 0; pass < 2; ++pass) {  // pass 0: timed alone; pass 1: the others, in parallel
     std::vector<std::function<void()>> jobs;
     for (const SpeedScene& sc : scenes) {
@@ -970,6 +977,7 @@ int main(int argc, char** argv) {
       std::printf("bench_peers: %s run, %d worker(s), load average %s\n", s.quick ? "quick" : "full",
                   s.workers, loadAverage().c_str());
       std::fflush(stdout);
+      if (s.wants("speed")) speedScenes(s);  // a bad --scenes fails before anything runs
       if (s.wants("scaling")) scaling(s);  // first: timing needs the machine to itself
       if (s.wants("speed")) speedAccuracy(s, methods);
       if (s.wants("map")) stabilityMap(s, methods);

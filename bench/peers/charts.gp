@@ -16,6 +16,8 @@ set style line 6 lc rgb "#9467bd" lw 2 pt 11
 set style line 7 lc rgb "#000000" lw 2 pt 13 ps 2
 set style line 8 lc rgb "#ff7f0e" lw 2 dt 2 pt 7
 set style line 9 lc rgb "#17becf" lw 3 pt 7
+# Data lines in a CSV file (0 when it is missing): a chart whose part did not run is skipped.
+data_lines(f) = system(sprintf("awk 'NR > 1 { n++ } END { print n + 0 }' '%s' 2>/dev/null || echo 0", f)) + 0
 floor_err = 1e-7
 clip(x) = (x < floor_err ? floor_err : x)
 
@@ -50,66 +52,75 @@ do for [scene in scenes] {
 }
 
 # ---------------------------------------------------------------- (b) stability map
-rates = dir."/stability_rates.csv"
-set output dir."/stability_map.png"
-set multiplot layout 2,3 title "success rate (all parameters within 1 %) per setting; one line per method"
-set yrange [-0.05:1.05]
-set key top right font ",8"
-set ylabel "success rate"
-# Each curve reads only its own rows (through awk), so its points join into a line; the x tics
-# (the settings) come from es_local's rows, which exist for every setting.
-rows(axis, m) = sprintf("< awk -F, -v a='%s' -v m='%s' '$1 == a && $4 == m' '%s'", axis, m, rates)
-do for [axis in "noise omega_h occlusion spread unknowns conditional"] {
-  set xlabel axis
-  set xrange [-0.3:*]
-  plot rows(axis, "es_local") using 3:(1/0):xtic(2) notitle, \
-       for [k in map_methods] rows(axis, word(methods,k+0)) using ($3 + (k+0-4)*0.02):7 \
-       with linespoints ls k+0 title word(methods,k+0)
+if (data_lines(dir."/stability_rates.csv") > 0) {
+  rates = dir."/stability_rates.csv"
+  set output dir."/stability_map.png"
+  set multiplot layout 2,3 title "success rate (all parameters within 1 %) per setting; one line per method"
+  set yrange [-0.05:1.05]
+  set key top right font ",8"
+  set ylabel "success rate"
+  # Each curve reads only its own rows (through awk), so its points join into a line; the x tics
+  # (the settings) come from es_local's rows, which exist for every setting.
+  rows(axis, m) = sprintf("< awk -F, -v a='%s' -v m='%s' '$1 == a && $4 == m' '%s'", axis, m, rates)
+  do for [axis in "noise omega_h occlusion spread unknowns conditional"] {
+    set xlabel axis
+    set xrange [-0.3:*]
+    plot rows(axis, "es_local") using 3:(1/0):xtic(2) notitle, \
+         for [k in map_methods] rows(axis, word(methods,k+0)) using ($3 + (k+0-4)*0.02):7 \
+         with linespoints ls k+0 title word(methods,k+0)
+  }
+  unset multiplot
+  set xrange [*:*]; set yrange [*:*]
 }
-unset multiplot
-set xrange [*:*]; set yrange [*:*]
 
 # ---------------------------------------------------------------- (c) long rollouts
-set output dir."/rollout.png"
-set multiplot layout 1,2 title "(c) identified models whose long rollout (10x the window) stays bounded"
-set style data histograms
-set style histogram clustered gap 1
-set style fill solid 0.8 border -1
-set yrange [0:1.05]
-set ylabel "bounded share"
-set xlabel ""
-set key top right
-plot dir."/rollout.csv" using 4:xtic(1) title "stability-map runs", '' using 7 title "speed-accuracy runs"
-set style data linespoints
-set xlabel "omega_max * h (explicit limit 2)"
-set xrange [-0.3:*]
-plot rows("omega_h", "es_local") using 3:(1/0):xtic(2) notitle, \
-     for [k in map_methods] rows("omega_h", word(methods,k+0)) using ($3 + (k+0-4)*0.02):8 \
-     with linespoints ls k+0 title word(methods,k+0)
-unset multiplot
-set xrange [*:*]; set yrange [*:*]
+if (data_lines(dir."/stability_rates.csv") > 0 && data_lines(dir."/rollout.csv") > 0) {
+  set output dir."/rollout.png"
+  set multiplot layout 1,2 title "(c) identified models whose long rollout (10x the window) stays bounded"
+  set style data histograms
+  set style histogram clustered gap 1
+  set style fill solid 0.8 border -1
+  set yrange [0:1.05]
+  set ylabel "bounded share"
+  set xlabel ""
+  set key top right
+  plot dir."/rollout.csv" using 4:xtic(1) title "stability-map runs", '' using 7 title "speed-accuracy runs"
+  set style data linespoints
+  set xlabel "omega_max * h (explicit limit 2)"
+  set xrange [-0.3:*]
+  plot rows("omega_h", "es_local") using 3:(1/0):xtic(2) notitle, \
+       for [k in map_methods] rows("omega_h", word(methods,k+0)) using ($3 + (k+0-4)*0.02):8 \
+       with linespoints ls k+0 title word(methods,k+0)
+  unset multiplot
+  set xrange [*:*]; set yrange [*:*]
+}
 
 # ---------------------------------------------------------------- (d) scaling
-set output dir."/scaling.png"
-set multiplot layout 1,2 title "(d) es_local: time per generation (100 children) on spring sheets, 10 frames"
-set logscale xy
-set xlabel "particles"; set ylabel "s per generation"; set key top left
-# Each series reads only its own rows (through awk) so that its points join into a line.
-threads_rows(t) = sprintf("< awk -F, 'NR > 1 && $5 == %d' '%s'", t, dir."/scaling.csv")
-plot threads_rows(1) using 1:6 with linespoints ls 1 title "1 thread", \
-     threads_rows(2) using 1:6 with linespoints ls 3 title "2 threads"
-unset logscale y
-set logscale x
-set yrange [0:1.25]; set ylabel "parallel efficiency t1 / (2 t2)"
-plot threads_rows(2) using 1:8 with linespoints ls 3 title "2 threads", 0.85 with lines dt 2 lc rgb "gray" title "85 % target"
-unset multiplot
-unset logscale; set yrange [*:*]
+if (data_lines(dir."/scaling.csv") > 0) {
+  set output dir."/scaling.png"
+  set multiplot layout 1,2 title "(d) es_local: time per generation (100 children) on spring sheets, 10 frames"
+  set logscale xy
+  set xlabel "particles"; set ylabel "s per generation"; set key top left
+  # Each series reads only its own rows (through awk) so that its points join into a line.
+  threads_rows(t) = sprintf("< awk -F, 'NR > 1 && $5 == %d' '%s'", t, dir."/scaling.csv")
+  plot threads_rows(1) using 1:6 with linespoints ls 1 title "1 thread", \
+       threads_rows(2) using 1:6 with linespoints ls 3 title "2 threads"
+  unset logscale y
+  set logscale x
+  set yrange [0:1.25]; set ylabel "parallel efficiency t1 / (2 t2)"
+  plot threads_rows(2) using 1:8 with linespoints ls 3 title "2 threads", 0.85 with lines dt 2 lc rgb "gray" title "85 % target"
+  unset multiplot
+  unset logscale; set yrange [*:*]
+}
 
 # ---------------------------------------------------------------- generations against unknowns
-set output dir."/generations_vs_unknowns.png"
-set terminal pngcairo size 800,500 noenhanced font ",10"
-set logscale x
-set xlabel "unknowns"; set ylabel "median generations to max error < 1 % (converged seeds)"
-set key top left
-plot for [k in "1 2 3 4 9"] dir."/unknowns_generations.csv" using (strcol(2) eq word(methods,k+0) ? $1 : 1/0):5 \
-     with linespoints ls k+0 title word(methods,k+0)
+if (data_lines(dir."/unknowns_generations.csv") > 0) {
+  set output dir."/generations_vs_unknowns.png"
+  set terminal pngcairo size 800,500 noenhanced font ",10"
+  set logscale x
+  set xlabel "unknowns"; set ylabel "median generations to max error < 1 % (converged seeds)"
+  set key top left
+  plot for [k in "1 2 3 4 9"] dir."/unknowns_generations.csv" using (strcol(2) eq word(methods,k+0) ? $1 : 1/0):5 \
+       with linespoints ls k+0 title word(methods,k+0)
+}
+
