@@ -34,4 +34,17 @@ if ! grep -q "not compiled in" "$tmp/out.txt"; then
   grep -q "^paper_object,cmaes," "$tmp/speed_accuracy_runs.csv"
   grep -q "^paper_object,lm," "$tmp/speed_accuracy_runs.csv"
 fi
+
+# One part alone into a fresh directory: only its files are required, the charts it has data for
+# are drawn, and a scene name the mode does not have is refused before anything runs.
+part="$tmp/part"
+"$here/scripts/bench" --quick --no-setup --out "$part" --only speed --scenes paper_object \
+  --methods es_lm,lls >"$tmp/part.txt" 2>&1 || { cat "$tmp/part.txt"; echo "partial run failed"; exit 1; }
+grep -q "CSV files checked" "$tmp/part.txt"
+[ -s "$part/speed_accuracy_paper_object.png" ] && [ ! -e "$part/scaling.csv" ] && [ ! -e "$part/stability_map.png" ]
+[ "$(cut -d, -f1 "$part/speed_accuracy_runs.csv" | sort -u | grep -vc scene)" -eq 1 ]
+if "$here/scripts/bench" --quick --no-setup --out "$part" --only speed --scenes provot_cloth >"$tmp/bad.txt" 2>&1; then
+  echo "an unknown --scenes name was accepted"; exit 1
+fi
+grep -q "no speed scene 'provot_cloth'" "$tmp/bad.txt"
 echo "test_bench_quick: ok"
