@@ -18,13 +18,12 @@ bool residualsAt(const CostFunction& cost, const ParameterSpace& space,
   return std::isfinite(*c);
 }
 
-/// The next damped Gauss-Newton step at a point with residual `residual`, predicted with an
-/// earlier Jacobian (J^T J + damping = `jtj` + diag(`damping`)).
-Eigen::VectorXd nextStep(const detail::JacobianColumns& jac, const Eigen::VectorXd& residual,
-                         const Eigen::MatrixXd& jtj, const Eigen::VectorXd& damping) {
+/// The damped Gauss-Newton step for gradient g = J^T r: (J^T J + diag(damping)) dx = -g.
+Eigen::VectorXd dampedStep(const Eigen::MatrixXd& jtj, const Eigen::VectorXd& damping,
+                           const Eigen::VectorXd& g) {
   Eigen::MatrixXd a = jtj;
   a.diagonal() += damping;
-  return a.ldlt().solve(-jac.gradient(residual));
+  return a.ldlt().solve(-g);
 }
 
 }  // namespace
@@ -175,9 +174,7 @@ LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& spac
     bool accepted = false;
     double rho = 0.0;
     while (!accepted && out.evaluations < max_evaluations && !out_of_time()) {
-      Eigen::MatrixXd a = jtj;
-      a.diagonal() += mu * scale;
-      const Eigen::VectorXd dx = a.ldlt().solve(-g);
+      const Eigen::VectorXd dx = dampedStep(jtj, mu * scale, g);
       if (!dx.allFinite()) {
         mu *= nu;
         nu *= 2.0;
@@ -215,7 +212,7 @@ LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& spac
       // Jacobian, at the new point) moves no gene by more than the tolerance, the search has
       // converged (to round-off on exact data, to the optimum on noisy data): stop without
       // paying for another Jacobian to find out.
-      const Eigen::VectorXd next = nextStep(jac, residual, jtj, mu * scale);
+      const Eigen::VectorXd next = dampedStep(jtj, mu * scale, jac.gradient(residual));
       bool small = next.allFinite();
       for (size_t k = 0; k < n && small; ++k)
         small = std::fabs(next[static_cast<Eigen::Index>(k)]) <= settings.step_tolerance * (hi[k] - lo[k]);
