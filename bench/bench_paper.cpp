@@ -112,7 +112,8 @@ struct Settings {
   int refine_start = -1;     // -1 = engine default
   int refine_period = -1;
   int refine_evaluations = -1;
-  std::string refine;        // "" = engine default (bobyqa)
+  std::string refine;        // "" = the preset's
+  mme::Preset preset = mme::Preset::kPaper;  // the paper's experiments with its own settings
   uint64_t seed = 1;
   bool wants(const std::string& name) const {
     return only.empty() || ("," + only + ",").find("," + name + ",") != std::string::npos;
@@ -131,13 +132,14 @@ void summary(const std::string& experiment, const RunResult& r) {
 }
 
 mme::IdentifyOptions esOptions(const Settings& s, int generations) {
-  mme::IdentifyOptions o;
+  mme::IdentifyOptions o = mme::identifyOptionsFor(s.preset);
   if (s.generations > 0) generations = s.generations;
   o.generations = s.quick ? std::max(20, generations / 20) : generations;
   if (s.refine_start >= 0) o.es.refine_start_generation = s.refine_start;
   if (s.refine_period >= 0) o.es.refine_period = s.refine_period;
   if (s.refine_evaluations >= 0) o.es.refine_max_evaluations = s.refine_evaluations;
-  if (!s.refine.empty()) o.es.refine_algorithm = s.refine;
+  if (!s.refine.empty() && !mme::parseRefineAlgorithm(s.refine, &o.es.refine_algorithm))
+    throw mme::InputError(std::string("--refine must be ") + mme::refineAlgorithmNames());
   o.es.threads = s.threads;
   o.es.seed = s.seed;
   return o;
@@ -268,12 +270,19 @@ int main(int argc, char** argv) {
       else if (a == "--refine-period" && i + 1 < argc) s.refine_period = std::atoi(argv[++i]);
       else if (a == "--refine-evaluations" && i + 1 < argc) s.refine_evaluations = std::atoi(argv[++i]);
       else if (a == "--refine" && i + 1 < argc) s.refine = argv[++i];
+      else if (a == "--preset" && i + 1 < argc) {
+        if (!mme::parsePreset(argv[++i], &s.preset)) {
+          std::fprintf(stderr, "bench_paper: --preset must be %s\n", mme::presetNames());
+          return 2;
+        }
+      }
       else if (a == "--seed" && i + 1 < argc) s.seed = std::strtoull(argv[++i], nullptr, 10);
       else {
         std::fprintf(stderr, "usage: bench_paper [--quick] [--out-dir DIR] [--threads T] "
                              "[--only fig1,table1,table2,scaling,random18]\n"
                              "       [--generations N] [--refine-start G] [--refine-period G]\n"
                              "       [--refine-evaluations E] [--refine ALGORITHM] [--seed S]\n"
+                             "       [--preset paper|default] (default: paper)\n"
                              "       bench_paper compare TRUTH.yaml ESTIMATE.yaml\n");
         return 2;
       }

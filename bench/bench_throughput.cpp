@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "motion_model_estimation/core/cost.h"
+#include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/scenes/scenes.h"
 
@@ -173,7 +173,7 @@ struct Result {
   double evals_per_s, bond_evals_per_s, per_core, ns_per_bond, per_cpu_s;
 };
 
-Result measure(const Case& c, const mme::CostFunction& cost, int threads, double seconds) {
+Result measure(const Case& c, const mme::ShortTermCost& cost, int threads, double seconds) {
   const std::vector<double> values = mme::getValues(c.model, cost.freeParameters());
   std::vector<double> local;
   auto once = [&]() {
@@ -267,7 +267,7 @@ int main(int argc, char** argv) {
   std::printf("%-20s %3s %10s %14s %14s %9s %14s  %s\n", "case", "thr", "evals/s",
               "bond evals/s", "per core", "ns/bond", "per cpu-s", "(bond evals/call, terms)");
   for (const Case& c : cases) {
-    const mme::CostFunction cost(c.model, c.data);
+    const mme::ShortTermCost cost(c.model, c.data);
     // Frames are what evaluateParallel splits: a single-frame data set runs on one thread.
     const int frames = std::max(1, c.data.numFrames() - 2);
     for (int threads : {1, 2}) {

@@ -413,7 +413,7 @@ void scaling(const Settings& s) {
     const mme::Model truth = bench::makeSheet(rows, cols, 100.0, 5);
     mme::State state;
     const mme::Trajectory data = bench::simulateWindow(truth, frames, 100.0, 0, &state);
-    const auto cost = std::make_shared<mme::CostFunction>(bench::forgetFreeValues(truth), data);
+    const auto cost = std::make_shared<mme::ShortTermCost>(bench::forgetFreeValues(truth), data);
     const mme::ParameterSpace space(bench::forgetFreeValues(truth), data);
     const std::vector<double> values = mme::getValues(truth, space.refs());
     auto t0 = Clock::now();
@@ -435,7 +435,7 @@ void scaling(const Settings& s) {
         o.seed = 1;
         o.threads = threads;
         mme::EvolutionStrategy es(space, o);
-        es.setCostFunction(cost);
+        es.setCost(cost);
         es.step();  // initial population + first generation (not timed)
         t0 = Clock::now();
         for (int g = 0; g < generations; ++g) es.step();
@@ -891,7 +891,7 @@ void summary(const Settings& s, double total_wall_s) {
 
   // ---------------------------------------------------------------- notes
   md << "## How the methods were run\n\n"
-        "- All methods share one `mme::CostFunction` and `mme::ParameterSpace` per problem (genes: log of "
+        "- All methods share one `mme::ShortTermCost` and `mme::ParameterSpace` per problem (genes: log of "
         "positive parameters, the model's bounds) and the same random starts: draw i of seed s is the "
         "i-th individual of the engine's initial population for seed s (`ParameterSpace::sampleInitial`); "
         "multi-start methods take draws 0, 1, 2, ... in turn.\n"
@@ -904,7 +904,7 @@ void summary(const Settings& s, double total_wall_s) {
         "- `bobyqa`: NLopt LN_BOBYQA from each start in turn (initial step = the initial distribution's "
         "spread) until the budget.\n"
         "- `lm`: Ceres Levenberg-Marquardt (DENSE_QR, bounds) on the cost's residuals "
-        "(`CostFunction::residuals`: predicted minus observed position, x y z per term, the form the "
+        "(`ShortTermCost::residuals`: predicted minus observed position, x y z per term, the form the "
         "engine's own refinement uses), `DynamicNumericDiffCostFunction` with forward differences "
         "(n + 1 evaluations per Jacobian), multi-start until the budget.\n"
         "- `es_early` and `es_lm` are the engine with other settings only: the BOBYQA refinement "

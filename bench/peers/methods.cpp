@@ -166,21 +166,19 @@ RunResult runEs(const Problem& p, uint64_t seed, const Budget& budget, bool keep
                 Schedule schedule) {
   RunResult r;
   Tracker tracker(p, budget, keep_trace);
-  mme::EsOptions o;  // default options
+  // es_lm is the engine's default preset (the Levenberg-Marquardt refinement on the residuals,
+  // early and often, on the smooth genes); es_local and es_early the paper's preset, es_early
+  // with another refinement schedule (a setting, not a code change): BOBYQA from generation 10,
+  // every 10, instead of the paper's 400 / 100.
+  mme::EsOptions o =
+      mme::esOptionsFor(schedule == Schedule::kEarlyLm ? mme::Preset::kDefault : mme::Preset::kPaper);
   o.seed = seed;
   o.threads = 1;
   // A refinement runs while it pays, possibly for many windows: keep it inside the budget.
   o.refine_total_evaluation_cap = budget.max_evaluations;
   if (schedule == Schedule::kEarlyBobyqa) {
-    // The engine with another refinement schedule (a setting, not a code change): BOBYQA from
-    // generation 10, every 10, instead of the paper's 400 / 100.
     o.refine_start_generation = kEarlyRefineGeneration;
     o.refine_period = kEarlyRefineGeneration;
-  } else if (schedule == Schedule::kEarlyLm) {
-    // Settings again: the Levenberg-Marquardt refinement on the residuals, early and often.
-    o.refine_algorithm = "levenberg_marquardt";
-    o.refine_start_generation = kLmRefineGeneration;
-    o.refine_period = kLmRefineGeneration;
   }
   if (!local) {
     // Ablation through the options only (the engine is unchanged): the local-cost operators
@@ -191,7 +189,7 @@ RunResult runEs(const Problem& p, uint64_t seed, const Budget& budget, bool keep
     o.share_crossover = 0.0;
   }
   mme::EvolutionStrategy es(*p.space, o);
-  es.setCostFunction(p.cost);
+  es.setCost(p.cost);
   es.setDeadline(std::chrono::steady_clock::now() +
                  std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                      std::chrono::duration<double>(budget.max_wall_s)));
@@ -328,7 +326,7 @@ RunResult runPagmo(const Problem& p, uint64_t seed, const Budget& budget, bool k
 
 // ---------------------------------------------------------------- Ceres Levenberg-Marquardt
 #ifdef MME_HAVE_CERES
-/// The cost's own residuals (CostFunction::residuals: predicted minus observed position, x y z
+/// The cost's own residuals (ShortTermCost::residuals: predicted minus observed position, x y z
 /// per term), the same least-squares form the engine's Levenberg-Marquardt refinement uses.
 struct CostResiduals {
   const Problem* problem;

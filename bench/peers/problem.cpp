@@ -94,7 +94,7 @@ Problem makeProblem(const std::string& name, const mme::Model& truth, int identi
   p.model.substeps = identification_substeps;
   if (p.model.frame_rate_hz <= 0.0) p.model.frame_rate_hz = data.frame_rate_hz;
   p.data = data;
-  p.cost = std::make_shared<mme::CostFunction>(p.model, p.data);
+  p.cost = std::make_shared<mme::ShortTermCost>(p.model, p.data);
   p.space = std::make_shared<mme::ParameterSpace>(p.model, p.data);
   p.truth_values = mme::getValues(truth, p.space->refs());
   const int frames = data.numFrames();

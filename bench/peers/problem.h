@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "motion_model_estimation/core/cost.h"
+#include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/model.h"
 #include "motion_model_estimation/core/random.h"
 #include "motion_model_estimation/core/simulator.h"
@@ -30,7 +30,7 @@ struct Problem {
   mme::Model truth;    ///< true values (free flags set); substeps = the data generator's
   mme::Model model;    ///< what identification sees: free values forgotten, identification substeps
   mme::Trajectory data;
-  std::shared_ptr<const mme::CostFunction> cost;
+  std::shared_ptr<const mme::ShortTermCost> cost;
   std::shared_ptr<const mme::ParameterSpace> space;
   std::vector<double> truth_values;  ///< physical, in free-parameter order
   /// Starts: < 0 = the paper's initial distribution (ParameterSpace::sampleInitial, the same

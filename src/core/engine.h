@@ -1,4 +1,4 @@
-// Private to the core: the compiled motion law shared by Simulator and CostFunction.
+// Private to the core: the compiled motion law shared by Simulator and ShortTermCost.
 //
 // Both the simulator and the cost integrate with this one Engine so that, for the same inputs,
 // they do bit-identical arithmetic (the true model then has zero cost on its own simulated

@@ -1,7 +1,5 @@
 #include "motion_model_estimation/identification/evolution_strategy.h"
 
-#include <nlopt.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -9,7 +7,6 @@
 #include <thread>
 
 #include "motion_model_estimation/core/error.h"
-#include "motion_model_estimation/identification/levenberg_marquardt.h"
 
 namespace mme {
 
@@ -36,14 +33,44 @@ std::string validateOptions(const EsOptions& o) {
   if (!(o.refine_stall_factor == 0.0 || o.refine_stall_factor > 1.0) ||
       !std::isfinite(o.refine_stall_factor))
     return "refine_stall_factor must be 0 (one window) or > 1";
-  if (o.refine_algorithm != "bobyqa" && o.refine_algorithm != "newuoa" &&
-      o.refine_algorithm != "praxis" && o.refine_algorithm != "levenberg_marquardt")
-    return "refine_algorithm must be bobyqa, newuoa, praxis or levenberg_marquardt";
   return "";
 }
 
+EsOptions esOptionsFor(Preset preset) {
+  EsOptions o;
+  switch (preset) {
+    case Preset::kDefault:
+      break;
+    case Preset::kPaper:
+      o.refine_algorithm = RefineAlgorithm::kBobyqa;
+      o.refine_start_generation = 400;
+      o.refine_period = 100;
+      o.refine_smooth_genes_only = false;
+      break;
+  }
+  return o;
+}
+
+bool parsePreset(const std::string& name, Preset* preset) {
+  if (name == "default") *preset = Preset::kDefault;
+  else if (name == "paper") *preset = Preset::kPaper;
+  else return false;
+  return true;
+}
+
+const char* presetName(Preset preset) {
+  switch (preset) {
+    case Preset::kDefault: return "default";
+    case Preset::kPaper: return "paper";
+  }
+  return "?";
+}
+
+const char* presetNames() { return "default or paper"; }
+
 EvolutionStrategy::EvolutionStrategy(ParameterSpace space, const EsOptions& options)
-    : space_(std::move(space)), options_(options), random_(options.seed) {
+    : space_(std::move(space)), options_(options), random_(options.seed),
+      refiner_(Refiner::Create(options.refine_algorithm)) {
   const std::string bad = validateOptions(options_);
   if (!bad.empty()) throw InputError("evolution strategy: " + bad);
   if (space_.size() == 0) throw InputError("the model has no free parameter to identify");
@@ -51,7 +78,7 @@ EvolutionStrategy::EvolutionStrategy(ParameterSpace space, const EsOptions& opti
   operator_successes_.assign(7, 0);
 }
 
-void EvolutionStrategy::setCostFunction(std::shared_ptr<const CostFunction> cost) {
+void EvolutionStrategy::setCost(std::shared_ptr<const Cost> cost) {
   if (cost->freeParameters().size() != space_.size())
     throw InputError("cost function and parameter space disagree on the free parameters");
   cost_ = std::move(cost);
@@ -316,83 +343,6 @@ void EvolutionStrategy::select(std::vector<Individual>* children,
   best_index_ = 0;  // chosen[0] is the best of the pool
 }
 
-namespace {
-struct RefineContext {
-  const CostFunction* cost;
-  const ParameterSpace* space;
-  nlopt::opt* opt;
-  std::chrono::steady_clock::time_point deadline;
-  uint64_t window;             ///< evaluations over which progress is judged
-  double stall_factor;         ///< the best cost must shrink this much per window (0: no test)
-  double start_cost;            ///< the cost before the first window
-  uint64_t calls = 0;
-  double best = std::numeric_limits<double>::infinity();
-  std::vector<double> best_after;  ///< best cost after each call
-};
-
-double refineObjective(const std::vector<double>& genes, std::vector<double>& /*grad*/,
-                       void* data) {
-  auto* ctx = static_cast<RefineContext*>(data);
-  ++ctx->calls;
-  double c = ctx->cost->evaluate(ctx->space->toPhysical(genes), nullptr);
-  if (!std::isfinite(c)) c = 1e300;
-  ctx->best = std::min(ctx->best, c);
-  ctx->best_after.push_back(ctx->best);
-  if (std::chrono::steady_clock::now() > ctx->deadline) ctx->opt->force_stop();
-  // Stalled: the last window did not divide the best cost by the factor (converged, at the
-  // round-off floor, or crawling), judged against the best cost before that window.
-  const uint64_t w = ctx->window;
-  if (ctx->calls >= w && ctx->calls % w == 0) {
-    const double window_start =
-        ctx->calls == w ? ctx->start_cost : ctx->best_after[ctx->calls - w - 1];
-    if (!(ctx->stall_factor > 0.0) || !(ctx->best * ctx->stall_factor <= window_start))
-      ctx->opt->force_stop();
-  }
-  return c;
-}
-}  // namespace
-
-std::vector<double> EvolutionStrategy::refineWithNlopt(const Individual& start, uint64_t* calls) {
-  // A Powell-family derivative-free local search (the paper's "variant of the Powell method").
-  // One long run rather than fixed short ones: ill-conditioned costs (a stiff clamp next to a
-  // weak cubic term) need BOBYQA's quadratic model to mature, which a restart throws away; it
-  // stops when a window of evaluations no longer pays.
-  const size_t n = space_.size();
-  nlopt::algorithm algo = nlopt::LN_BOBYQA;
-  if (options_.refine_algorithm == "newuoa") algo = nlopt::LN_NEWUOA_BOUND;
-  if (options_.refine_algorithm == "praxis") algo = nlopt::LN_PRAXIS;
-  nlopt::opt opt(algo, static_cast<unsigned>(n));
-  std::vector<double> lo(n), hi(n), step(n);
-  for (size_t k = 0; k < n; ++k) {
-    lo[k] = space_.gene(k).lower;
-    hi[k] = space_.gene(k).upper;
-    // Initial trust region from the self-adapted mutability: the ES already knows the scale.
-    step[k] = std::max(std::min(start.mutability[k] * 2.0, 0.25 * (hi[k] - lo[k])), 1e-9);
-  }
-  opt.set_lower_bounds(lo);
-  opt.set_upper_bounds(hi);
-  opt.set_initial_step(step);
-  const uint64_t window = refineWindow();
-  RefineContext ctx{cost_.get(), &space_, &opt, deadline_, window,
-                    options_.refine_stall_factor, start.cost, 0, start.cost, {}};
-  ctx.best_after.reserve(window);
-  opt.set_min_objective(refineObjective, &ctx);
-  const uint64_t max_evaluations = refineEvaluationLimit();
-  std::vector<double> x = start.genes;
-  *calls = 0;
-  if (max_evaluations < 2 * n + 2) return x;  // BOBYQA needs 2n+1 points before it moves
-  opt.set_maxeval(static_cast<int>(std::min<uint64_t>(max_evaluations, 1u << 30)));
-  opt.set_ftol_rel(1e-15);
-  double fx = start.cost;
-  try {
-    opt.optimize(x, fx);
-  } catch (const std::exception&) {
-    // NLopt signals roundoff-limited or forced stops by exceptions; x holds the best point.
-  }
-  *calls = ctx.calls;
-  return x;
-}
-
 uint64_t EvolutionStrategy::refineWindow() const {
   return options_.refine_window_evaluations > 0
              ? static_cast<uint64_t>(options_.refine_window_evaluations)
@@ -417,43 +367,28 @@ void EvolutionStrategy::refineBest() {
   // population only when it improves the best.
   const size_t n = space_.size();
   const Individual& start = best();
-  uint64_t calls = 0;
-  std::vector<double> x;
-  if (options_.refine_algorithm == "levenberg_marquardt") {
-    // The cost is a sum of squares: Gauss-Newton steps on its residuals. BOBYQA's stall rule
-    // counted in Jacobians (3 in a row that do not divide the cost by the stall factor), its
-    // evaluation limits and deadline, and a step tolerance (LmSettings) for convergence.
-    LmSettings lm;
-    lm.max_evaluations = refineEvaluationLimit();
-    if (lm.max_evaluations < n + 2) return;  // not even one Jacobian and step
-    lm.stall_factor = options_.refine_stall_factor;
-    lm.deadline = deadline_;
-    LmResult result = levenbergMarquardt(*cost_, space_, start.genes, lm, threadPool());
-    calls = result.evaluations;
-    x = std::move(result.genes);
-    if (result.jacobian_too_large) {
-      // A model too large for a stored Jacobian: BOBYQA instead (its memory is O(n^2)), from
-      // the best point the Levenberg-Marquardt steps reached before the Jacobian outgrew the cap.
-      Individual from = start;
-      if (result.cost < start.cost) {
-        from.genes = x;
-        from.cost = result.cost;
-      }
-      evaluations_ += calls;  // counted against BOBYQA's limit, then as this refinement's
-      uint64_t bobyqa_calls = 0;
-      x = refineWithNlopt(from, &bobyqa_calls);
-      evaluations_ -= calls;
-      calls += bobyqa_calls;
-    }
-  } else {
-    x = refineWithNlopt(start, &calls);
+  RefineSettings settings;
+  settings.max_evaluations = refineEvaluationLimit();
+  settings.window_evaluations = refineWindow();
+  settings.stall_factor = options_.refine_stall_factor;
+  settings.deadline = deadline_;
+  if (options_.refine_smooth_genes_only) {
+    settings.movable.assign(n, 0);
+    for (size_t k = 0; k < n; ++k) settings.movable[k] = space_.gene(k).smooth;
   }
-  evaluations_ += calls;
-  if (calls == 0) return;
+  RefineStart from;
+  from.genes = start.genes;
+  from.cost = start.cost;
+  from.steps = start.mutability;
+  const RefineResult result = refiner_->refine(*cost_, space_, from, settings, threadPool());
+  last_refine_status_ = result.status;
+  evaluations_ += result.evaluations;
+  if (result.evaluations == 0) return;
+  ++refinements_;
   ++operator_counts_[static_cast<int>(Operator::kRefine)];
   Individual refined = start;
   for (size_t k = 0; k < n; ++k)
-    refined.genes[k] = std::min(std::max(x[k], space_.gene(k).lower), space_.gene(k).upper);
+    refined.genes[k] = std::min(std::max(result.genes[k], space_.gene(k).lower), space_.gene(k).upper);
   std::vector<Individual> one{refined};
   evaluate(&one);
   if (one[0].cost < start.cost) {

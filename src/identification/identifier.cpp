@@ -7,7 +7,7 @@
 #include <limits>
 #include <memory>
 
-#include "motion_model_estimation/core/cost.h"
+#include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/error.h"
 
 namespace mme {
@@ -18,10 +18,28 @@ std::string validateOptions(const IdentifyOptions& o) {
   if (o.generations < 1) return "generations must be >= 1";
   if (!(o.target_cost >= 0.0)) return "target_cost must be >= 0";
   if (!(o.max_wall_time_s >= 0.0)) return "max_wall_time_s must be >= 0";
+  if (o.patience_generations < 0) return "patience_generations must be >= 0";
   return "";
 }
 
-std::vector<double> estimateStdDevs(const CostFunction& cost, const ParameterSpace& space,
+IdentifyOptions identifyOptionsFor(Preset preset) {
+  IdentifyOptions o;
+  o.es = esOptionsFor(preset);
+  if (preset == Preset::kPaper) o.patience_generations = 0;
+  return o;
+}
+
+const char* identifyStopName(IdentifyStop stop) {
+  switch (stop) {
+    case IdentifyStop::kGenerations: return "generation budget";
+    case IdentifyStop::kTargetCost: return "target cost";
+    case IdentifyStop::kWallTime: return "wall-time limit";
+    case IdentifyStop::kConverged: return "converged";
+  }
+  return "?";
+}
+
+std::vector<double> estimateStdDevs(const Cost& cost, const ParameterSpace& space,
                                     const std::vector<double>& genes) {
   const size_t n = genes.size();
   std::vector<double> out(n, std::numeric_limits<double>::quiet_NaN());
@@ -71,18 +89,23 @@ IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
   const std::string bad = validateOptions(options);
   if (!bad.empty()) throw InputError(bad);
   const auto start = std::chrono::steady_clock::now();
-  auto cost = std::make_shared<CostFunction>(model, trajectory);
+  auto cost = std::make_shared<ShortTermCost>(model, trajectory);
   if (cost->termCount() == 0)
     throw InputError("no usable (particle, frame) terms: too few frames or everything occluded");
   ParameterSpace space(model, trajectory);
   EvolutionStrategy es(space, options.es);
-  es.setCostFunction(cost);
+  es.setCost(cost);
   if (options.max_wall_time_s > 0.0)
     es.setDeadline(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                std::chrono::duration<double>(options.max_wall_time_s)));
   auto elapsed = [&start]() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
+  // Convergence: the best cost no longer falls (relative 1e-9) or sits at the round-off floor.
+  const double floor_m2 = 1e-26 * static_cast<double>(cost->residualCount());
+  double reference_cost = std::numeric_limits<double>::infinity();
+  int last_fall_generation = 0;
+  IdentifyStop stop = IdentifyStop::kGenerations;
   for (int g = 0; g < options.generations; ++g) {
     es.step();
     if (progress) {
@@ -94,8 +117,24 @@ IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
       p.best_values = es.bestValues();
       progress(p);
     }
-    if (options.target_cost > 0.0 && es.best().cost <= options.target_cost) break;
-    if (options.max_wall_time_s > 0.0 && elapsed() >= options.max_wall_time_s) break;
+    const double best = es.best().cost;
+    if (best < reference_cost * (1.0 - 1e-9) && reference_cost > floor_m2) {
+      reference_cost = best;
+      last_fall_generation = es.generation();
+    }
+    if (options.target_cost > 0.0 && best <= options.target_cost) {
+      stop = IdentifyStop::kTargetCost;
+      break;
+    }
+    if (options.max_wall_time_s > 0.0 && elapsed() >= options.max_wall_time_s) {
+      stop = IdentifyStop::kWallTime;
+      break;
+    }
+    if (options.patience_generations > 0 && es.refinements() > 0 &&
+        es.generation() - last_fall_generation >= options.patience_generations) {
+      stop = IdentifyStop::kConverged;
+      break;
+    }
   }
   IdentifyResult r;
   r.parameters = space.refs();
@@ -104,6 +143,8 @@ IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
   r.generations = es.generation();
   r.evaluations = es.evaluations();
   r.frames = trajectory.numFrames();
+  r.stop = stop;
+  r.last_refine_status = es.lastRefineStatus();
   r.std_devs = options.estimate_std
                    ? estimateStdDevs(*cost, space, es.best().genes)
                    : std::vector<double>(r.values.size(), std::numeric_limits<double>::quiet_NaN());

@@ -12,7 +12,7 @@ namespace mme {
 namespace {
 
 /// Residuals at genes (finite or flagged): false when the model blew up there.
-bool residualsAt(const CostFunction& cost, const ParameterSpace& space,
+bool residualsAt(const Cost& cost, const ParameterSpace& space,
                  const std::vector<double>& genes, std::vector<double>* r, double* c) {
   *c = cost.residuals(space.toPhysical(genes), r);
   return std::isfinite(*c);
@@ -88,11 +88,18 @@ void normalEquations(const JacobianColumns& jac, const Eigen::VectorXd& residual
 
 }  // namespace detail
 
-LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& space,
+LmResult levenbergMarquardt(const Cost& cost, const ParameterSpace& space,
                             const std::vector<double>& start, const LmSettings& settings,
                             ThreadPool* pool) {
-  const size_t n = space.size();
+  const auto began = std::chrono::steady_clock::now();
   const size_t m = cost.residualCount();
+  // The genes this search moves (the others keep their start value): column j of the Jacobian
+  // and component j of a step belong to gene active[j].
+  std::vector<size_t> active;
+  for (size_t k = 0; k < space.size(); ++k)
+    if (settings.movable.empty() || (k < settings.movable.size() && settings.movable[k]))
+      active.push_back(k);
+  const size_t n = active.size();
   const uint64_t max_evaluations =
       settings.max_evaluations > 0 ? settings.max_evaluations : 50 * (n + 1);
   LmResult out;
@@ -102,14 +109,14 @@ LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& spac
   out.evaluations = 1;
   if (n == 0 || m == 0 || !std::isfinite(out.cost)) return out;
   if (m > std::numeric_limits<uint32_t>::max()) {  // row indices are stored in 32 bits
-    out.jacobian_too_large = true;
+    out.status = RefineStatus::kJacobianTooLarge;
     return out;
   }
 
   std::vector<double> lo(n), hi(n);
-  for (size_t k = 0; k < n; ++k) {
-    lo[k] = space.gene(k).lower;
-    hi[k] = space.gene(k).upper;
+  for (size_t j = 0; j < n; ++j) {
+    lo[j] = space.gene(active[j]).lower;
+    hi[j] = space.gene(active[j]).upper;
   }
   // The Jacobian is stored by sparse columns: a gene moves only the terms of particles near its
   // bond type's sites (the local-cost structure), and the other entries of a forward difference
@@ -123,46 +130,65 @@ LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& spac
   std::atomic<bool> too_large{false};
   Eigen::VectorXd residual =
       Eigen::Map<const Eigen::VectorXd>(r0.data(), static_cast<Eigen::Index>(m));
-  std::vector<double> x = start, trial(n), r_trial;
+  std::vector<double> x = start, trial = start, r_trial;
   std::vector<double> steps(n);
   std::vector<double> cost_after{out.cost};  // the start, then after each Jacobian's step
   double mu = -1.0, nu = 2.0;
-  const auto out_of_time = [&]() {
-    return std::chrono::steady_clock::now() > settings.deadline;
+  const auto now = []() { return std::chrono::steady_clock::now(); };
+  // A Jacobian costs n evaluations: when the time they take (at the mean evaluation time so far)
+  // would run past the deadline, stop before starting it rather than throw it away half done.
+  const auto jacobian_fits = [&]() {
+    const auto elapsed = now() - began;
+    return now() + elapsed / static_cast<double>(out.evaluations) * static_cast<double>(n) <=
+           settings.deadline;
   };
-  while (out.evaluations + n <= max_evaluations && !out_of_time() && out.cost > 0.0) {
+  out.status = RefineStatus::kEvaluationLimit;
+  while (true) {
+    if (out.evaluations + n > max_evaluations) {
+      out.status = RefineStatus::kEvaluationLimit;
+      break;
+    }
+    if (settings.deadline != std::chrono::steady_clock::time_point::max() && !jacobian_fits()) {
+      out.status = RefineStatus::kDeadline;
+      break;
+    }
+    if (!(out.cost > 0.0)) {
+      out.status = RefineStatus::kConverged;  // an exact fit
+      break;
+    }
     // Forward-difference Jacobian, stepping inward at a bound.
-    for (size_t k = 0; k < n; ++k) {
-      double h = 1e-7 * std::max({std::fabs(x[k]), 1e-3 * (hi[k] - lo[k]), 1e-8});
-      if (x[k] + h > hi[k]) h = -h;
-      steps[k] = h;
+    for (size_t j = 0; j < n; ++j) {
+      const double xj = x[active[j]];
+      double h = 1e-7 * std::max({std::fabs(xj), 1e-3 * (hi[j] - lo[j]), 1e-8});
+      if (xj + h > hi[j]) h = -h;
+      steps[j] = h;
     }
     stored = 0;
-    const auto column = [&](size_t k) {
+    const auto column = [&](size_t j) {
       thread_local std::vector<double> genes, rk;
       genes = x;
-      genes[k] += steps[k];
-      double ck = 0.0;
-      std::vector<uint32_t>& rows = jac.rows[k];
-      std::vector<double>& values = jac.values[k];
+      genes[active[j]] += steps[j];
+      double cj = 0.0;
+      std::vector<uint32_t>& rows = jac.rows[j];
+      std::vector<double>& values = jac.values[j];
       rows.clear();
       values.clear();
       // A column whose model blew up is left empty: that gene is held this iteration.
-      if (!residualsAt(cost, space, genes, &rk, &ck)) return;
+      if (!residualsAt(cost, space, genes, &rk, &cj)) return;
       for (size_t i = 0; i < m; ++i) {
         const double d = rk[i] - residual[static_cast<Eigen::Index>(i)];
         if (d == 0.0) continue;
         rows.push_back(static_cast<uint32_t>(i));
-        values.push_back(d / steps[k]);
+        values.push_back(d / steps[j]);
       }
       if ((stored += rows.size()) > settings.max_jacobian_entries) too_large = true;
     };
     if (pool) pool->parallelFor(n, column);
-    else for (size_t k = 0; k < n; ++k) column(k);
+    else for (size_t j = 0; j < n; ++j) column(j);
     out.evaluations += n;
     ++out.jacobians;
     if (too_large) {
-      out.jacobian_too_large = true;
+      out.status = RefineStatus::kJacobianTooLarge;
       break;
     }
     Eigen::MatrixXd jtj;
@@ -173,7 +199,16 @@ LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& spac
     // Damped steps until one lowers the cost (Nielsen's update of the damping).
     bool accepted = false;
     double rho = 0.0;
-    while (!accepted && out.evaluations < max_evaluations && !out_of_time()) {
+    out.status = RefineStatus::kNoProgress;
+    while (!accepted) {
+      if (out.evaluations >= max_evaluations) {
+        out.status = RefineStatus::kEvaluationLimit;
+        break;
+      }
+      if (now() > settings.deadline) {
+        out.status = RefineStatus::kDeadline;
+        break;
+      }
       const Eigen::VectorXd dx = dampedStep(jtj, mu * scale, g);
       if (!dx.allFinite()) {
         mu *= nu;
@@ -182,8 +217,9 @@ LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& spac
         continue;
       }
       bool moved = false;
-      for (size_t k = 0; k < n; ++k) {
-        trial[k] = std::min(std::max(x[k] + dx[static_cast<Eigen::Index>(k)], lo[k]), hi[k]);
+      for (size_t j = 0; j < n; ++j) {
+        const size_t k = active[j];
+        trial[k] = std::min(std::max(x[k] + dx[static_cast<Eigen::Index>(j)], lo[j]), hi[j]);
         moved = moved || trial[k] != x[k];
       }
       if (!moved) break;  // the step vanished (round-off floor)
@@ -201,6 +237,7 @@ LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& spac
         residual = Eigen::Map<const Eigen::VectorXd>(r_trial.data(), static_cast<Eigen::Index>(m));
         accepted = true;
       } else {
+        trial = x;
         mu *= nu;
         nu *= 2.0;
         if (nu > 1e15) break;  // no damping helps: at the floor of what the data allow
@@ -214,19 +251,20 @@ LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& spac
       // paying for another Jacobian to find out.
       const Eigen::VectorXd next = dampedStep(jtj, mu * scale, jac.gradient(residual));
       bool small = next.allFinite();
-      for (size_t k = 0; k < n && small; ++k)
-        small = std::fabs(next[static_cast<Eigen::Index>(k)]) <= settings.step_tolerance * (hi[k] - lo[k]);
+      for (size_t j = 0; j < n && small; ++j)
+        small = std::fabs(next[static_cast<Eigen::Index>(j)]) <= settings.step_tolerance * (hi[j] - lo[j]);
       if (small) {
-        out.converged = true;
+        out.status = RefineStatus::kConverged;
         break;
       }
     }
     cost_after.push_back(out.cost);
     const size_t iterations = cost_after.size() - 1;
     const size_t w = static_cast<size_t>(std::max(settings.stall_iterations, 1));
-    if (iterations >= w) {
-      if (!(settings.stall_factor > 0.0)) break;
-      if (!(out.cost * settings.stall_factor <= cost_after[iterations - w])) break;
+    if (iterations >= w && (!(settings.stall_factor > 0.0) ||
+                            !(out.cost * settings.stall_factor <= cost_after[iterations - w]))) {
+      out.status = RefineStatus::kStalled;
+      break;
     }
   }
   out.genes = x;

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "motion_model_estimation/core/cost.h"
+#include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
 
@@ -165,7 +165,7 @@ bool OnlineEstimator::update() {
   es_version_ = version;
   // Live streams carry their own clock: the model's rate wins only when it states one.
   if (!(model.frame_rate_hz > 0.0)) model.frame_rate_hz = window_data.frame_rate_hz;
-  auto cost = std::make_shared<CostFunction>(model, window_data);
+  auto cost = std::make_shared<ShortTermCost>(model, window_data);
   if (cost->termCount() == 0) return false;
   if (!es_) {
     es_ = std::make_unique<EvolutionStrategy>(ParameterSpace(model, window_data), options_.es);
@@ -185,7 +185,7 @@ bool OnlineEstimator::update() {
       }
     }
   }
-  es_->setCostFunction(cost);  // re-evaluates the living population on the new window
+  es_->setCost(cost);  // re-evaluates the living population on the new window
   for (int g = 0; g < options_.generations_per_update; ++g) es_->step();
 
   Estimate e;

@@ -65,6 +65,7 @@ ParameterSpace::ParameterSpace(const Model& model, const Trajectory& trajectory)
     g.ref = ref;
     g.has_initial = p.has_value;
     const bool is_gravity = ref.bond_type < 0;
+    g.smooth = is_gravity || (ref.param != kMinDistance && ref.param != kMaxDistance);
     g.log_scale = !is_gravity && isPositivePhysical(ref.param) && !(p.has_min && p.min <= 0.0);
     // Physical bounds: the model's when given, else defaults scaled by what is known.
     double lo, hi;

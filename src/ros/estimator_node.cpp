@@ -92,9 +92,27 @@ EstimatorNodeOptions readEstimatorOptions(const ros::NodeHandle& pnh) {
   e.es.seed = static_cast<uint64_t>(seed);
   read(pnh, "threads", &e.es.threads);
   require(e.es.threads >= 1 && e.es.threads <= 256, "~threads must be in [1, 256]");
+  // ~preset chooses the engine settings (default: the measured best; paper: the paper's
+  // schedule); the ~refine_* parameters, when set, override it.
+  std::string preset_name = presetName(Preset::kDefault);
+  read(pnh, "preset", &preset_name);
+  Preset preset = Preset::kDefault;
+  require(parsePreset(preset_name, &preset),
+          "~preset must be " + std::string(presetNames()) + ", got '" + preset_name + "'");
+  {
+    const EsOptions from_preset = onlineEsOptions(preset);
+    e.es.refine_algorithm = from_preset.refine_algorithm;
+    e.es.refine_start_generation = from_preset.refine_start_generation;
+    e.es.refine_period = from_preset.refine_period;
+    e.es.refine_smooth_genes_only = from_preset.refine_smooth_genes_only;
+  }
   read(pnh, "refine_start_generation", &e.es.refine_start_generation);
   read(pnh, "refine_period", &e.es.refine_period);
-  read(pnh, "refine_algorithm", &e.es.refine_algorithm);  // checked by validateOptions below
+  std::string refine_algorithm = refineAlgorithmName(e.es.refine_algorithm);
+  read(pnh, "refine_algorithm", &refine_algorithm);
+  require(parseRefineAlgorithm(refine_algorithm, &e.es.refine_algorithm),
+          "~refine_algorithm must be " + std::string(refineAlgorithmNames()) + ", got '" +
+              refine_algorithm + "'");
   require(e.es.refine_start_generation >= 0 && e.es.refine_period >= 0,
           "~refine_start_generation and ~refine_period must be >= 0");
   const std::string bad = validateOptions(e);

@@ -20,6 +20,7 @@ const char* kUsage =
     "                [--method es] [--generations N] [--population P] [--window-frames W]\n"
     "                [--first-frame F] [--frames N] [--seed S] [--threads T]\n"
     "                [--compare-to-model] [--target-cost C] [--max-time-s S] [--quiet]\n"
+    "                [--preset default|paper] [--patience G]\n"
     "                [--refine bobyqa|newuoa|praxis|levenberg_marquardt] [--refine-start G]\n"
     "                [--refine-period G]\n";
 
@@ -47,7 +48,7 @@ int run(int argc, char** argv) {
   mme::CliArgs args(argc, argv,
                     {"model", "trajectory", "topic", "out", "method", "generations", "population",
                      "window-frames", "first-frame", "frames", "seed", "threads", "target-cost",
-                     "max-time-s", "refine", "refine-start", "refine-period"},
+                     "max-time-s", "refine", "refine-start", "refine-period", "preset", "patience"},
                     {"compare-to-model", "quiet", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -61,14 +62,23 @@ int run(int argc, char** argv) {
   const std::string trajectory_path = args.get("trajectory");
   const std::string out_path = args.get("out");
 
-  mme::IdentifyOptions options;
+  // The preset first (default: the measured best; paper: the paper's schedule), then the
+  // options that override it.
+  mme::Preset preset = mme::Preset::kDefault;
+  if (args.has("preset") && !mme::parsePreset(args.get("preset"), &preset))
+    throw mme::InputError("--preset '" + args.get("preset") + "' is unknown (available: " +
+                          mme::presetNames() + ")");
+  mme::IdentifyOptions options = mme::identifyOptionsFor(preset);
+  options.patience_generations = static_cast<int>(
+      args.getInt("patience", options.patience_generations, 0, 100000000));
   options.generations = static_cast<int>(args.getInt("generations", 1000, 1, 100000000));
   options.es.population = static_cast<int>(args.getInt("population", 100, 2, 1000000));
   options.es.offspring = options.es.population;
   options.es.seed = static_cast<uint64_t>(args.getInt("seed", 1, 0, 0x7fffffffL));
   options.es.threads = static_cast<int>(args.getInt("threads", 1, 1, 256));
-  // The refinement: the paper's BOBYQA from generation 400 every 100 unless told otherwise.
-  options.es.refine_algorithm = args.get("refine", options.es.refine_algorithm);
+  if (args.has("refine") && !mme::parseRefineAlgorithm(args.get("refine"), &options.es.refine_algorithm))
+    throw mme::InputError("--refine '" + args.get("refine") + "' is unknown (available: " +
+                          mme::refineAlgorithmNames() + ")");
   options.es.refine_start_generation = static_cast<int>(
       args.getInt("refine-start", options.es.refine_start_generation, 0, 100000000));
   options.es.refine_period =
@@ -129,9 +139,12 @@ int run(int argc, char** argv) {
                 tty ? "   " : "\n");
     std::fflush(stdout);
   };
-  std::printf("identify: %d frames x %d markers at %g Hz, %zu free parameters, population %d\n",
+  std::printf("identify: %d frames x %d markers at %g Hz, %zu free parameters, population %d, "
+              "preset %s (refinement %s from generation %d, every %d)\n",
               trajectory.numFrames(), trajectory.numMarkers(), model.frame_rate_hz,
-              mme::freeParameters(model).size(), options.es.population);
+              mme::freeParameters(model).size(), options.es.population, mme::presetName(preset),
+              mme::refineAlgorithmName(options.es.refine_algorithm),
+              options.es.refine_start_generation, options.es.refine_period);
   const mme::IdentifyResult r = mme::identifyModel(model, trajectory, options, progress);
   if (tty && !quiet) std::printf("\n");
 
@@ -158,6 +171,9 @@ int run(int argc, char** argv) {
   std::printf("global cost %.6e m^2 over %d frames, %d generations, %llu evaluations, %.2f s\n",
               r.global_cost, r.frames, r.generations,
               static_cast<unsigned long long>(r.evaluations), r.wall_time_s);
+  std::printf("stopped: %s (last refinement: %s %s)\n", mme::identifyStopName(r.stop),
+              mme::refineAlgorithmName(options.es.refine_algorithm),
+              mme::refineStatusName(r.last_refine_status));
 
   mme::IdentificationInfo info;
   info.method = "es";

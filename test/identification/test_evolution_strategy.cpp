@@ -6,7 +6,7 @@
 #include <cmath>
 #include <memory>
 
-#include "motion_model_estimation/core/cost.h"
+#include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/evolution_strategy.h"
 #include "motion_model_estimation/identification/identifier.h"
@@ -56,7 +56,7 @@ struct Fixture {
   mme::Model truth = smallObject();
   mme::Model search = withoutValues(truth);
   mme::Trajectory data = mme::simulateTrajectory(truth, 60, 100.0);
-  std::shared_ptr<mme::CostFunction> cost = std::make_shared<mme::CostFunction>(search, data);
+  std::shared_ptr<mme::ShortTermCost> cost = std::make_shared<mme::ShortTermCost>(search, data);
   std::vector<double> true_values = mme::getValues(truth, mme::freeParameters(truth));
 };
 
@@ -96,15 +96,17 @@ TEST(EvolutionStrategy, IdentifiesProvotClothFromItsSingleEquilibriumFrame) {
 // caller's budget.
 TEST(EvolutionStrategy, RefinementStaysInsideTheEvaluationCapAndTheDeadline) {
   Fixture f;
-  auto evaluationsAfterRefinement = [&f](uint64_t cap, bool past_deadline) {
+  auto evaluationsAfterRefinement = [&f](uint64_t cap, bool past_deadline,
+                                         mme::RefineAlgorithm algorithm = mme::RefineAlgorithm::kBobyqa) {
     mme::EsOptions options;
+    options.refine_algorithm = algorithm;
     options.population = 20;
     options.offspring = 20;
     options.refine_start_generation = 2;
     options.refine_period = 100;
     options.refine_total_evaluation_cap = cap;
     mme::EvolutionStrategy es(mme::ParameterSpace(f.search, f.data), options);
-    es.setCostFunction(f.cost);
+    es.setCost(f.cost);
     if (past_deadline) es.setDeadline(std::chrono::steady_clock::now());
     es.step();
     es.step();  // generation 2: 20 initial + 2 x 20 children, then the refinement
@@ -117,6 +119,9 @@ TEST(EvolutionStrategy, RefinementStaysInsideTheEvaluationCapAndTheDeadline) {
   EXPECT_GT(capped, 60u);  // it did refine, up to the cap
   // Past its deadline a refinement stops at its first evaluation (+1 to re-evaluate the point).
   EXPECT_LE(evaluationsAfterRefinement(0, true), 62u);
+  // Levenberg-Marquardt does not start a Jacobian that would end past the deadline.
+  EXPECT_GT(evaluationsAfterRefinement(0, false, mme::RefineAlgorithm::kLevenbergMarquardt), 70u);
+  EXPECT_LE(evaluationsAfterRefinement(0, true, mme::RefineAlgorithm::kLevenbergMarquardt), 62u);
 }
 
 TEST(EvolutionStrategy, OperatorsKeepEveryGeneInsideItsBounds) {
@@ -128,7 +133,7 @@ TEST(EvolutionStrategy, OperatorsKeepEveryGeneInsideItsBounds) {
   options.share_partly_new = 0.2;
   options.initial_mutability = 1.0;  // big jumps hit the bounds
   mme::EvolutionStrategy es(mme::ParameterSpace(f.search, f.data), options);
-  es.setCostFunction(f.cost);
+  es.setCost(f.cost);
   for (int g = 0; g < 30; ++g) {
     es.step();
     for (const mme::Individual& ind : es.population())
@@ -189,7 +194,7 @@ TEST(EvolutionStrategy, SameSeedSameResultForAnyThreadCount) {
     options.refine_start_generation = 10;
     options.refine_period = 10;
     mme::EvolutionStrategy es(mme::ParameterSpace(f.search, f.data), options);
-    es.setCostFunction(f.cost);
+    es.setCost(f.cost);
     for (int g = 0; g < 25; ++g) es.step();
     return es.best().genes;
   };
@@ -205,7 +210,7 @@ TEST(EvolutionStrategy, WarmStartKeepsThePopulationOnANewWindow) {
   options.population = 30;
   options.offspring = 30;
   mme::EvolutionStrategy es(mme::ParameterSpace(f.search, f.data), options);
-  es.setCostFunction(f.cost);
+  es.setCost(f.cost);
   for (int g = 0; g < 60; ++g) es.step();
   const std::vector<double> before = es.best().genes;
   // A later window of the same motion: the population lives on and is re-evaluated.
@@ -214,8 +219,8 @@ TEST(EvolutionStrategy, WarmStartKeepsThePopulationOnANewWindow) {
   later.frame_numbers.erase(later.frame_numbers.begin(), later.frame_numbers.begin() + 60);
   later.positions_m.erase(later.positions_m.begin(), later.positions_m.begin() + 60 * 5);
   later.occluded.erase(later.occluded.begin(), later.occluded.begin() + 60 * 5);
-  auto cost2 = std::make_shared<mme::CostFunction>(f.search, later);
-  es.setCostFunction(cost2);
+  auto cost2 = std::make_shared<mme::ShortTermCost>(f.search, later);
+  es.setCost(cost2);
   EXPECT_EQ(es.generation(), 60);
   EXPECT_EQ(es.population().size(), 30u);
   std::vector<double> local;
@@ -242,7 +247,7 @@ TEST(LevenbergMarquardt, ConvergesInAFewJacobiansInsideItsLimitsAndBounds) {
   EXPECT_LT(one.evaluations, 30 * (n + 1));
   EXPECT_GE(one.jacobians, 2);
   // It stops at the round-off floor on the step tolerance, not after stalled Jacobians.
-  EXPECT_TRUE(one.converged);
+  EXPECT_EQ(one.status, mme::RefineStatus::kConverged);
   EXPECT_DOUBLE_EQ(one.cost, f.cost->evaluate(space.toPhysical(one.genes), nullptr));
 
   mme::ThreadPool pool(2);
@@ -259,10 +264,10 @@ TEST(LevenbergMarquardt, ConvergesInAFewJacobiansInsideItsLimitsAndBounds) {
   mme::LmSettings small;
   small.max_jacobian_entries = 10;
   const mme::LmResult refused = mme::levenbergMarquardt(*f.cost, space, start, small, nullptr);
-  EXPECT_TRUE(refused.jacobian_too_large);
+  EXPECT_EQ(refused.status, mme::RefineStatus::kJacobianTooLarge);
   EXPECT_EQ(refused.genes, start);
   EXPECT_EQ(refused.evaluations, n + 1);
-  EXPECT_FALSE(one.jacobian_too_large);
+  EXPECT_NE(one.status, mme::RefineStatus::kJacobianTooLarge);
 
   // The first type's stiffness (true 20 N/m) capped at 15: the answer sits on that bound.
   mme::Model capped = f.search;
@@ -284,7 +289,7 @@ TEST(LevenbergMarquardt, ConvergesInAFewJacobiansInsideItsLimitsAndBounds) {
 TEST(LevenbergMarquardt, StopsOnTheNoisyOptimumNotBeforeIt) {
   Fixture f;
   mme::addGaussianNoise(&f.data, 1e-4, 7);
-  f.cost = std::make_shared<mme::CostFunction>(f.search, f.data);
+  f.cost = std::make_shared<mme::ShortTermCost>(f.search, f.data);
   const mme::ParameterSpace space(f.search, f.data);
   std::vector<double> start = space.toSearch(f.true_values);
   for (size_t k = 0; k < space.size(); ++k) start[k] = space.reflect(k, start[k] * (k % 2 ? 1.3 : 0.7));
@@ -333,26 +338,28 @@ TEST(LevenbergMarquardt, NormalEquationsAgreeOnBothPaths) {
 }
 
 // The engine with the Levenberg-Marquardt refinement from generation 5 identifies the small
-// object in 10 generations; the option is validated by name.
+// object in 10 generations; the algorithm is parsed by name.
 TEST(EvolutionStrategy, LevenbergMarquardtRefinementIdentifiesTheSmallObjectEarly) {
   Fixture f;
   mme::EsOptions options;
   options.population = 40;
   options.offspring = 40;
-  options.refine_algorithm = "levenberg_marquardt";
+  options.refine_algorithm = mme::RefineAlgorithm::kLevenbergMarquardt;
   options.refine_start_generation = 5;
   options.refine_period = 5;
   EXPECT_EQ(mme::validateOptions(options), "");
   mme::EvolutionStrategy es(mme::ParameterSpace(f.search, f.data), options);
-  es.setCostFunction(f.cost);
+  es.setCost(f.cost);
   for (int g = 0; g < 10; ++g) es.step();
   EXPECT_LT(maxRelativeError(es.bestValues(), f.true_values), 1e-6) << es.best().cost;
   // 40 + 10 x 40 children and two refinements of a few Jacobians (518 evaluations); BOBYQA in
   // the same place runs its windows of 30n + 100 evaluations (1231 in all).
   EXPECT_LT(es.evaluations(), 700u);
   EXPECT_GT(es.operatorSuccesses()[static_cast<int>(mme::Operator::kRefine)], 0u);
-  options.refine_algorithm = "levenberg-marquardt";
-  EXPECT_NE(mme::validateOptions(options).find("refine_algorithm"), std::string::npos);
+  mme::RefineAlgorithm parsed = mme::RefineAlgorithm::kBobyqa;
+  EXPECT_TRUE(mme::parseRefineAlgorithm("levenberg_marquardt", &parsed));
+  EXPECT_EQ(parsed, mme::RefineAlgorithm::kLevenbergMarquardt);
+  EXPECT_FALSE(mme::parseRefineAlgorithm("levenberg-marquardt", &parsed));
 }
 
 }  // namespace

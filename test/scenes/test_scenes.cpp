@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "motion_model_estimation/core/cost.h"
+#include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/scenes/scenes.h"
@@ -50,7 +50,7 @@ std::vector<Eigen::Vector3d> framePositions(const Trajectory& trajectory, int t)
 
 /// Cost of the true values on `data` (the model's own trajectory or equilibrium).
 double costAtTruth(const Model& model, const Trajectory& data) {
-  CostFunction cost(model, data);
+  ShortTermCost cost(model, data);
   return cost.evaluate(getValues(model, cost.freeParameters()), nullptr);
 }
 
@@ -352,7 +352,7 @@ TEST(ProvotCloth, ReferenceDataIsTheHangingEquilibriumWithClampedSprings) {
   }
   // Static mode (x(t-1) = x(t) = x(t+1)): the true model predicts no motion; a 1 % change of a
   // rest length or of tau does.
-  CostFunction cost(model, data);
+  ShortTermCost cost(model, data);
   std::vector<double> values = getValues(model, cost.freeParameters());
   const double at_truth = cost.evaluate(values, nullptr);
   EXPECT_LT(at_truth, 1e-20);

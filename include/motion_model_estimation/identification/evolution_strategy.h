@@ -1,6 +1,6 @@
 // The paper's evolution strategy on local costs (Stanciulescu & Louchet, section 3): self-adaptive
 // mutabilities, four mutation types, local-cost-biased multi-parent crossover, elitist biased
-// selection and a periodic Powell-family refinement. The caller owns the loop (step()), and the
+// selection and a periodic local refinement (refiner.h). The caller owns the loop (step()), and the
 // cost function can be swapped for a newer window while the population lives on (warm start).
 #pragma once
 
@@ -16,6 +16,8 @@
 #include "motion_model_estimation/core/random.h"
 #include "motion_model_estimation/core/thread_pool.h"
 #include "motion_model_estimation/identification/parameter_space.h"
+#include "motion_model_estimation/identification/preset.h"
+#include "motion_model_estimation/identification/refiner.h"
 
 namespace mme {
 
@@ -35,24 +37,31 @@ struct EsOptions {
   int tournament_size = 3;       ///< bias toward good (global or local) costs when choosing parents
   double elite_fraction = 0.2;   ///< best share of the pool always kept
   double initial_mutability = 0.05;  ///< initial mutation std as a share of each gene's range
-  int refine_start_generation = 400;  ///< first generation with a Powell-family refinement
-  int refine_period = 100;            ///< generations between refinements (0 = never)
+  // The refinement of the best individual (refiner.h). The defaults are the measured best
+  // (Levenberg-Marquardt from generation 5, every 5: docs/bench); Preset::kPaper gives the
+  // paper's (BOBYQA from generation 400, every 100).
+  RefineAlgorithm refine_algorithm = RefineAlgorithm::kLevenbergMarquardt;
+  int refine_start_generation = 5;    ///< first generation with a refinement
+  int refine_period = 5;              ///< generations between refinements (0 = never)
   /// A refinement stops when its last refine_window_evaluations evaluations (0 = 30 x genes
-  /// + 100) did not divide the best cost by refine_stall_factor (0: after one window)...
+  /// + 100; LM: 3 Jacobians) did not divide the best cost by refine_stall_factor (0: after one
+  /// window)...
   int refine_window_evaluations = 0;
   double refine_stall_factor = 1.01;
   int refine_max_evaluations = 0;     ///< ...or after this many (0 = 40 windows)
   /// Evaluations a refinement may bring the run's total to (0 = no limit): lets a caller with
   /// an evaluation budget keep a long refinement inside it.
   uint64_t refine_total_evaluation_cap = 0;
-  /// bobyqa | newuoa | praxis (Powell family, derivative-free) | levenberg_marquardt (on the
-  /// cost's residuals, forward-difference Jacobian: stops after refine_stall_factor failed for
-  /// 3 Jacobians in a row; the evaluation caps and the deadline apply as to the others).
-  std::string refine_algorithm = "bobyqa";
+  /// The refinement moves only genes with a useful slope (Gene::smooth): the thresholds of
+  /// conditional bonds stay with the evolution strategy.
+  bool refine_smooth_genes_only = true;
 };
 
 /// Empty string when the options are usable, else the reason naming the option.
 std::string validateOptions(const EsOptions& options);
+/// The options of a preset: kDefault = the defaults above (the measured best), kPaper = the
+/// paper's schedule (BOBYQA from generation 400, every 100, every gene refined).
+EsOptions esOptionsFor(Preset preset);
 
 struct Individual {
   std::vector<double> genes;        ///< search-space values (see ParameterSpace)
@@ -70,7 +79,7 @@ class EvolutionStrategy {
 
   /// Sets the cost to minimise. With a live population this re-evaluates it (warm start when
   /// the window slides). The cost's free parameters must match the space's genes.
-  void setCostFunction(std::shared_ptr<const CostFunction> cost);
+  void setCost(std::shared_ptr<const Cost> cost);
   /// One generation (the first call also draws the initial population).
   void step();
   /// Forgets the population; the next step() starts from scratch.
@@ -95,6 +104,9 @@ class EvolutionStrategy {
   const std::vector<uint64_t>& operatorCounts() const { return operator_counts_; }
   /// Children of each operator that entered the population (survived selection).
   const std::vector<uint64_t>& operatorSuccesses() const { return operator_successes_; }
+  /// How the last refinement ended (kNotRun before the first) and how many have run.
+  RefineStatus lastRefineStatus() const { return last_refine_status_; }
+  int refinements() const { return refinements_; }
 
   // Building blocks, public for tests (these draw from the strategy's own stream).
   Individual makeRandom() { return makeRandom(random_); }
@@ -120,15 +132,13 @@ class EvolutionStrategy {
   void forEach(size_t count, const std::function<void(size_t)>& body);
   void select(std::vector<Individual>* children, const std::vector<Operator>& ops);
   void refineBest();
-  /// NLopt (BOBYQA, NEWUOA, PRAXIS) from `start`: the best point; *calls = its evaluations.
-  std::vector<double> refineWithNlopt(const Individual& start, uint64_t* calls);
   uint64_t refineWindow() const;           ///< evaluations per progress window
   uint64_t refineEvaluationLimit() const;  ///< a refinement's evaluations, caps applied
   void initialise();
 
   ParameterSpace space_;
   EsOptions options_;
-  std::shared_ptr<const CostFunction> cost_;
+  std::shared_ptr<const Cost> cost_;
   FastRandom random_;
   std::vector<Individual> population_;
   int best_index_ = 0;
@@ -139,6 +149,9 @@ class EvolutionStrategy {
   std::vector<double> initial_guess_;
   double initial_guess_spread_ = 0.0;
   std::unique_ptr<ThreadPool> pool_;  ///< options_.threads - 1 workers (none for 1 thread)
+  std::unique_ptr<Refiner> refiner_;  ///< made from options_.refine_algorithm
+  RefineStatus last_refine_status_ = RefineStatus::kNotRun;
+  int refinements_ = 0;
   /// Refinements stop here (setDeadline); default: never.
   std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
 };

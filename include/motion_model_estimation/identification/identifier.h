@@ -19,9 +19,20 @@ struct IdentifyOptions {
   double target_cost = 0.0;      ///< stop once the global cost [m^2] is <= it (0 = never)
   double max_wall_time_s = 0.0;  ///< stop after this wall time (0 = no limit)
   bool estimate_std = true;      ///< finite-difference Hessian at the optimum
+  /// Stop once converged: after a refinement has run, this many generations in a row without
+  /// the best cost falling by a relative 1e-9 (a cost at the round-off floor, 1e-26 m^2 per
+  /// residual, counts as no fall). 0 = run the whole generation budget (the paper).
+  int patience_generations = 30;
 };
 
 std::string validateOptions(const IdentifyOptions& options);
+/// The options of a preset (preset.h): kDefault = the defaults above, kPaper = the paper's
+/// schedule and the whole generation budget.
+IdentifyOptions identifyOptionsFor(Preset preset);
+
+/// Why identifyModel stopped.
+enum class IdentifyStop { kGenerations, kTargetCost, kWallTime, kConverged };
+const char* identifyStopName(IdentifyStop stop);
 
 struct Progress {
   int generation = 0;
@@ -40,6 +51,8 @@ struct IdentifyResult {
   uint64_t evaluations = 0;
   double wall_time_s = 0.0;
   int frames = 0;
+  IdentifyStop stop = IdentifyStop::kGenerations;
+  RefineStatus last_refine_status = RefineStatus::kNotRun;  ///< how the last refinement ended
   Model model;  ///< the input model with every free value filled in
 };
 
@@ -51,7 +64,7 @@ IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
 
 /// 1-sigma uncertainty of each gene-mapped parameter from the global cost's curvature at
 /// `values`: Cov = 2 s^2 H^-1 with s^2 = cost / (3 terms - n). NaN where not defined.
-std::vector<double> estimateStdDevs(const CostFunction& cost, const ParameterSpace& space,
+std::vector<double> estimateStdDevs(const Cost& cost, const ParameterSpace& space,
                                     const std::vector<double>& genes);
 
 }  // namespace mme

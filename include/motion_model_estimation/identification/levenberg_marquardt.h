@@ -15,6 +15,7 @@
 #include "motion_model_estimation/core/cost.h"
 #include "motion_model_estimation/core/thread_pool.h"
 #include "motion_model_estimation/identification/parameter_space.h"
+#include "motion_model_estimation/identification/refiner.h"
 
 namespace mme {
 
@@ -31,6 +32,9 @@ struct LmSettings {
   /// Most non-zero Jacobian entries kept (12 bytes each: 10^8 = 1.2 GB); beyond it the
   /// refinement stops rather than exhaust memory (LmResult::jacobian_too_large).
   uint64_t max_jacobian_entries = 100000000;
+  /// Genes the search may move (empty = all); the others keep their start value and cost no
+  /// Jacobian column.
+  std::vector<uint8_t> movable;
 };
 
 struct LmResult {
@@ -38,11 +42,11 @@ struct LmResult {
   double cost = 0.0;          ///< its global cost [m^2]
   uint64_t evaluations = 0;   ///< residual evaluations (each = one full-cost evaluation)
   int jacobians = 0;
-  /// Stopped on the step tolerance (converged) rather than on a stall, a limit or the deadline.
-  bool converged = false;
-  /// The Jacobian's non-zero entries exceeded max_jacobian_entries: stopped there, keeping the
-  /// best point so far (the caller may fall back to a derivative-free search).
-  bool jacobian_too_large = false;
+  /// kConverged (step tolerance), kStalled (stall rule), kNoProgress (no damping lowers the
+  /// cost), kEvaluationLimit, kDeadline (passed, or the next Jacobian would pass it),
+  /// kJacobianTooLarge (the non-zero entries exceeded max_jacobian_entries: stopped there with
+  /// the best point so far; the caller may fall back to a derivative-free search).
+  RefineStatus status = RefineStatus::kNotRun;
 };
 
 namespace detail {
@@ -72,7 +76,7 @@ void normalEquations(const JacobianColumns& jac, const Eigen::VectorXd& residual
 
 /// Minimises cost(space.toPhysical(genes)) from `start` (inside the bounds). `pool` may be null
 /// (one thread).
-LmResult levenbergMarquardt(const CostFunction& cost, const ParameterSpace& space,
+LmResult levenbergMarquardt(const Cost& cost, const ParameterSpace& space,
                             const std::vector<double>& start, const LmSettings& settings,
                             ThreadPool* pool);
 

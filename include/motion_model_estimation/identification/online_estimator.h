@@ -19,11 +19,11 @@
 
 namespace mme {
 
-/// The engine's defaults, except that a refinement is one window of evaluations (30 x genes +
-/// 100): an update must stay short, the data move on while it runs, and the next refinement
-/// starts from the newer window anyway.
-inline EsOptions onlineEsDefaults() {
-  EsOptions o;
+/// The preset's engine options, except that a refinement is one window of evaluations (30 x
+/// genes + 100; LM: 3 Jacobians): an update must stay short, the data move on while it runs, and
+/// the next refinement starts from the newer window anyway.
+inline EsOptions onlineEsOptions(Preset preset = Preset::kDefault) {
+  EsOptions o = esOptionsFor(preset);
   o.refine_stall_factor = 0.0;
   return o;
 }
@@ -36,7 +36,7 @@ struct OnlineEstimatorOptions {
   /// Start the population at the model's values of the free parameters when all have one
   /// (resuming an autosaved model) instead of the paper's random initialisation.
   bool resume_from_model_values = false;
-  EsOptions es = onlineEsDefaults();  ///< population, seed, threads, operators
+  EsOptions es = onlineEsOptions();  ///< population, seed, threads, operators
 };
 
 std::string validateOptions(const OnlineEstimatorOptions& options);

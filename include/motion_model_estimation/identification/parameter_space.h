@@ -20,6 +20,10 @@ struct Gene {
   double init_center = 0.0;   ///< centre of the initial distribution (search space)
   double init_spread = 1.0;   ///< std of the initial distribution (search space)
   bool has_initial = false;   ///< the model file gave a value (initial guess)
+  /// The cost has a useful slope along it. Not so for the thresholds of conditional bonds
+  /// (min_distance, max_distance): the cost is flat between the switching events, so gradient
+  /// refinements leave them to the evolution strategy.
+  bool smooth = true;
   /// max_elongation (Provot's tau) is searched as the clamp length ln((1 + tau) L), with L the
   /// same type's rest length: the clamp acts where that length meets the longest observed bond,
   /// a point that does not move when L does. Physical tau = exp(gene) / L - 1.
@@ -40,10 +44,10 @@ class ParameterSpace {
   size_t size() const { return genes_.size(); }
   const Gene& gene(size_t k) const { return genes_[k]; }
   const std::vector<Gene>& genes() const { return genes_; }
-  /// The free parameters in CostFunction order.
+  /// The free parameters in Cost order.
   std::vector<ParamRef> refs() const;
 
-  /// Genes -> physical values in CostFunction order (a clamp-length gene needs its type's rest
+  /// Genes -> physical values in Cost order (a clamp-length gene needs its type's rest
   /// length, so the conversion works on whole vectors).
   std::vector<double> toPhysical(const std::vector<double>& genes) const;
   /// Physical values -> genes (inverse of toPhysical inside the bounds; not reflected).

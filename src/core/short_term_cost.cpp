@@ -18,7 +18,7 @@
 //    others are inactive at every substep, so skipping them changes nothing but the time.
 //    The search radius (the upper bound) then costs nothing per evaluation.
 //  - Frames without a valid term are not integrated at all.
-#include "motion_model_estimation/core/cost.h"
+#include "motion_model_estimation/core/short_term_cost.h"
 
 #include <algorithm>
 #include <cmath>
@@ -58,7 +58,7 @@ struct Workspace {
 
 }  // namespace
 
-struct CostFunction::Impl {
+struct ShortTermCost::Impl {
   int n = 0;
   int substeps = 1;
   double frame_period_s = 0.0;
@@ -81,7 +81,7 @@ struct CostFunction::Impl {
   void prepareLaws(const std::vector<double>& values, Workspace* ws) const {
     if (values.size() != free_refs.size()) {
       std::ostringstream err;
-      err << "CostFunction: " << values.size() << " values for " << free_refs.size()
+      err << "ShortTermCost: " << values.size() << " values for " << free_refs.size()
           << " free parameters";
       throw std::invalid_argument(err.str());
     }
@@ -177,7 +177,7 @@ struct CostFunction::Impl {
   }
 };
 
-CostFunction::CostFunction(const Model& model, const Trajectory& trajectory)
+ShortTermCost::ShortTermCost(const Model& model, const Trajectory& trajectory)
     : impl_(new Impl) {
   Impl& m = *impl_;
   const std::string err = validateModel(model);
@@ -408,24 +408,24 @@ CostFunction::CostFunction(const Model& model, const Trajectory& trajectory)
     throw InputError("too many interaction candidate pairs");
 }
 
-CostFunction::~CostFunction() = default;
+ShortTermCost::~ShortTermCost() = default;
 
-const std::vector<ParamRef>& CostFunction::freeParameters() const { return impl_->free_refs; }
+const std::vector<ParamRef>& ShortTermCost::freeParameters() const { return impl_->free_refs; }
 
-double CostFunction::evaluate(const std::vector<double>& free_values,
+double ShortTermCost::evaluate(const std::vector<double>& free_values,
                               std::vector<double>* local_costs) const {
   return impl_->evaluateAll(free_values, local_costs, nullptr);
 }
 
-double CostFunction::residuals(const std::vector<double>& free_values,
+double ShortTermCost::residuals(const std::vector<double>& free_values,
                                std::vector<double>* residuals) const {
   residuals->resize(residualCount());  // run() writes every entry
   return impl_->evaluateAll(free_values, nullptr, residuals->data());
 }
 
-size_t CostFunction::residualCount() const { return 3 * impl_->valid.size(); }
+size_t ShortTermCost::residualCount() const { return 3 * impl_->valid.size(); }
 
-double CostFunction::evaluateParallel(const std::vector<double>& free_values,
+double ShortTermCost::evaluateParallel(const std::vector<double>& free_values,
                                       std::vector<double>* local_costs, int threads) const {
   const Impl& m = *impl_;
   const size_t num_chunks =
@@ -473,9 +473,9 @@ double CostFunction::evaluateParallel(const std::vector<double>& free_values,
   return total;
 }
 
-uint64_t CostFunction::bondEvaluationsPerCall() const { return impl_->bond_evals; }
+uint64_t ShortTermCost::bondEvaluationsPerCall() const { return impl_->bond_evals; }
 
-uint64_t CostFunction::bondEvaluationsFor(const std::vector<double>& free_values) const {
+uint64_t ShortTermCost::bondEvaluationsFor(const std::vector<double>& free_values) const {
   Workspace ws;
   impl_->prepareLaws(free_values, &ws);
   uint64_t total = 0;
@@ -484,7 +484,7 @@ uint64_t CostFunction::bondEvaluationsFor(const std::vector<double>& free_values
              static_cast<uint64_t>(impl_->substeps) * impl_->activeRuns(w, ws.inter_laws.data(), &ws);
   return total;
 }
-uint64_t CostFunction::termCount() const { return impl_->terms; }
-int CostFunction::numParticles() const { return impl_->n; }
+uint64_t ShortTermCost::termCount() const { return impl_->terms; }
+int ShortTermCost::numParticles() const { return impl_->n; }
 
 }  // namespace mme

@@ -1,4 +1,4 @@
-// CostFunction: zero at the truth, sensitivity to every parameter, occlusion rules, static
+// ShortTermCost: zero at the truth, sensitivity to every parameter, occlusion rules, static
 // single-frame mode, interactions, thread determinism, and agreement with the Simulator.
 #include <gtest/gtest.h>
 
@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <random>
 
-#include "motion_model_estimation/core/cost.h"
+#include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
 
@@ -86,7 +86,7 @@ Model sheetModel() {
   return m;
 }
 
-/// Reference cost computed with the Simulator, independently of CostFunction's bookkeeping.
+/// Reference cost computed with the Simulator, independently of ShortTermCost's bookkeeping.
 double referenceCost(const Model& model, const Trajectory& traj) {
   Simulator sim(model);
   const double h = 1.0 / model.frame_rate_hz;
@@ -107,7 +107,7 @@ double referenceCost(const Model& model, const Trajectory& traj) {
 TEST(Cost, ZeroAtTruthAndGrowsWhenAnyParameterIsPerturbed) {
   const Model model = sheetModel();
   const Trajectory traj = simulateTrajectory(model, 40, model.frame_rate_hz);
-  CostFunction cost(model, traj);
+  ShortTermCost cost(model, traj);
   const std::vector<double> truth = getValues(model, cost.freeParameters());
   ASSERT_EQ(truth.size(), 12u);
   ASSERT_EQ(cost.termCount(), 38u * 12u);
@@ -134,7 +134,7 @@ TEST(Cost, LocalCostsSumToGlobalAndMatchTheSimulator) {
   model.bond_types[0].param(kMaxElongation) = value(0.05);
   Trajectory traj = simulateTrajectory(model, 30, model.frame_rate_hz);
   addGaussianNoise(&traj, 1e-3, 7);
-  CostFunction cost(model, traj);
+  ShortTermCost cost(model, traj);
   const std::vector<double> truth = getValues(model, cost.freeParameters());
   std::vector<double> local;
   const double c = cost.evaluate(truth, &local);
@@ -154,7 +154,7 @@ TEST(Cost, ParallelEqualsSerialAndIsDeterministic) {
   const Model model = sheetModel();
   Trajectory traj = simulateTrajectory(model, 60, model.frame_rate_hz);
   addGaussianNoise(&traj, 1e-4, 3);
-  CostFunction cost(model, traj);
+  ShortTermCost cost(model, traj);
   std::vector<double> p = getValues(model, cost.freeParameters());
   p[0] *= 1.1;
   std::vector<double> l1, l2, l2b, l5;
@@ -191,7 +191,7 @@ TEST(Cost, ResidualsAreTheCostAsASumOfSquares) {
   Trajectory traj = simulateTrajectory(model, 20, 50.0);
   traj.occluded[10 * 8 + 3] = 1;
   traj.position(10, 3) = Vec::Zero();
-  CostFunction cost(model, traj);
+  ShortTermCost cost(model, traj);
   ASSERT_EQ(cost.residualCount(), 3 * cost.termCount());
   std::vector<double> p = getValues(model, cost.freeParameters());
   std::vector<double> r;
@@ -218,7 +218,7 @@ TEST(Cost, OcclusionDropsExactlyTheExpectedTerms) {
     const int k = 3, t0 = 10;
     occ.occluded[t0 * 8 + k] = 1;
     occ.position(t0, k) = Vec::Zero();
-    CostFunction cf(model, full), co(model, occ);
+    ShortTermCost cf(model, full), co(model, occ);
     // Dropped: (k, t0-1) because x_k(t0) is the target; frames t0 and t0+1 (x(t) resp.
     // x(t-1) missing) for every particle within `substeps` hops of k.
     const uint64_t near = 2 * substeps + 1;
@@ -242,7 +242,7 @@ TEST(Cost, FullyOccludedParticleKeepsCostFinite) {
   const Model model = chainModel(1);
   Trajectory traj = simulateTrajectory(model, 10, 50.0);
   for (int t = 0; t < 10; ++t) traj.occluded[t * 8 + 7] = 1;
-  CostFunction cost(model, traj);
+  ShortTermCost cost(model, traj);
   EXPECT_EQ(cost.termCount(), 8u * 6u);  // p6 and p7 never valid
   EXPECT_TRUE(std::isfinite(cost.evaluate(getValues(model, cost.freeParameters()), nullptr)));
 }
@@ -268,7 +268,7 @@ TEST(Cost, StaticSingleFrameZeroAtEquilibrium) {
   addParticle(&hanging, Vec(0, 0, 0), 1.0, true);
   addParticle(&hanging, Vec(0, 0, -(rest + mass * 9.81 / k)), mass);
   addBond(&hanging, s, 0, 1);
-  CostFunction cost(hanging, singleFrame(hanging));
+  ShortTermCost cost(hanging, singleFrame(hanging));
   EXPECT_EQ(cost.termCount(), 2u);
   EXPECT_EQ(cost.bondEvaluationsPerCall(), 1u);
   const std::vector<double> truth = getValues(hanging, cost.freeParameters());
@@ -290,11 +290,11 @@ TEST(Cost, StaticSingleFrameZeroAtEquilibrium) {
   addParticle(&between, Vec(4, 0, 0), 1.0, true);
   addBond(&between, h, 0, 1);
   addBond(&between, h, 1, 2);
-  CostFunction cost2(between, singleFrame(between));
+  ShortTermCost cost2(between, singleFrame(between));
   const std::vector<double> t2 = getValues(between, cost2.freeParameters());
   EXPECT_EQ(cost2.evaluate(t2, nullptr), 0.0);
   between.particles[1].position_m.x() = 3.1;  // off equilibrium
-  CostFunction cost3(between, singleFrame(between));
+  ShortTermCost cost3(between, singleFrame(between));
   EXPECT_GT(cost3.evaluate(t2, nullptr), 1e-12);
 }
 
@@ -303,7 +303,7 @@ TEST(Cost, StaticSingleFrameNeedsModelRate) {
   m.frame_rate_hz = 0.0;
   Trajectory one = singleFrame(m);
   one.frame_rate_hz = 100.0;
-  EXPECT_THROW(CostFunction(m, one), InputError);
+  EXPECT_THROW(ShortTermCost(m, one), InputError);
 }
 
 TEST(Cost, RejectsMismatchedTrajectoryAndMissingRate) {
@@ -312,13 +312,13 @@ TEST(Cost, RejectsMismatchedTrajectoryAndMissingRate) {
   Model fewer = m;
   fewer.particles.pop_back();
   fewer.bonds.pop_back();
-  EXPECT_THROW(CostFunction(fewer, traj), InputError);
+  EXPECT_THROW(ShortTermCost(fewer, traj), InputError);
   Model no_rate = m;
   no_rate.frame_rate_hz = 0.0;
   traj.frame_rate_hz = 0.0;
-  EXPECT_THROW(CostFunction(no_rate, traj), InputError);
+  EXPECT_THROW(ShortTermCost(no_rate, traj), InputError);
   traj.frame_rate_hz = 50.0;  // the data's rate is used when the model has none
-  EXPECT_NO_THROW(CostFunction(no_rate, traj));
+  EXPECT_NO_THROW(ShortTermCost(no_rate, traj));
 }
 
 /// Small 2-D fluid: gas on a unit grid, a jet of fast particles shot into it.
@@ -370,7 +370,7 @@ TEST(Cost, InteractionSceneZeroAtTruthAndCountsCandidates) {
   for (bool free_max : {false, true}) {
     const Model model = fluidModel(free_max);
     const Trajectory traj = simulateTrajectory(model, 25, model.frame_rate_hz);
-    CostFunction cost(model, traj);
+    ShortTermCost cost(model, traj);
     const std::vector<double> truth = getValues(model, cost.freeParameters());
     const double c0 = cost.evaluate(truth, nullptr);
     EXPECT_LT(c0 / cost.termCount(), 1e-26) << free_max;
@@ -396,7 +396,7 @@ TEST(Cost, InteractionSubstepsMatchTheSimulator) {
   model.substeps = 4;
   Trajectory traj = simulateTrajectory(model, 25, model.frame_rate_hz);
   addGaussianNoise(&traj, 1e-3, 5);
-  CostFunction cost(model, traj);
+  ShortTermCost cost(model, traj);
   const double c = cost.evaluate(getValues(model, cost.freeParameters()), nullptr);
   const double ref = referenceCost(model, traj);
   EXPECT_GT(ref, 0.0);
@@ -409,7 +409,7 @@ TEST(Cost, InteractionGroupOcclusionDropsPartnerGroups) {
   Trajectory occ = full;
   const int gas0 = 0, t0 = 5;
   occ.occluded[t0 * occ.numMarkers() + gas0] = 1;
-  CostFunction cf(model, full), co(model, occ);
+  ShortTermCost cf(model, full), co(model, occ);
   // gas interacts with gas and jet: every particle is dropped in frames t0 and t0+1, plus
   // the target term (gas0, t0-1).
   EXPECT_EQ(cf.termCount() - co.termCount(), 2u * 70u + 1u);
@@ -424,7 +424,7 @@ TEST(Cost, InteractionGroupOcclusionOnlyDropsInteractingGroups) {
   Trajectory occ = full;
   const int jet0 = 64, t0 = 5;
   occ.occluded[t0 * occ.numMarkers() + jet0] = 1;
-  CostFunction cf(model, full), co(model, occ);
+  ShortTermCost cf(model, full), co(model, occ);
   EXPECT_EQ(cf.termCount() - co.termCount(), 2u * (64u + 1u) + 1u);
 }
 
