@@ -62,6 +62,7 @@ struct Settings {
   std::vector<std::string> methods;
   std::vector<std::string> scenes;  ///< speed part: these scenes only (empty = all)
   int speed_seeds = 0;              ///< speed part: seeds per scene (0 = each scene's own)
+  std::vector<std::string> axes;    ///< map part: these axes only (empty = all)
   bool wants(const std::string& part) const {
     return only.empty() || ("," + only + ",").find("," + part + ",") != std::string::npos;
   }
@@ -326,6 +327,12 @@ std::vector<MapInstance> mapInstances(const Settings& s) {
             {"spread", {0.02, 0.1, 0.3, 0.6}},
             {"unknowns", {10, 20, 50, 100, 200}},
             {"conditional", {0, 2, 5, 10}}};
+  }
+  if (!s.axes.empty()) {
+    for (const std::string& a : s.axes)
+      if (!axes.count(a)) throw mme::InputError("--axes: no stability-map axis '" + a + "'");
+    for (auto it = axes.begin(); it != axes.end();)
+      it = std::find(s.axes.begin(), s.axes.end(), it->first) == s.axes.end() ? axes.erase(it) : std::next(it);
   }
   std::vector<MapInstance> out;
   for (const auto& [axis, values] : axes)
@@ -944,10 +951,11 @@ int main(int argc, char** argv) {
       else if (a == "--seeds") s.seeds = std::max(1, std::atoi(value().c_str()));
       else if (a == "--seeds-200") s.seeds_200 = std::max(1, std::atoi(value().c_str()));
       else if (a == "--only") s.only = value();
-      else if (a == "--methods" || a == "--scenes") {
+      else if (a == "--methods" || a == "--scenes" || a == "--axes") {
         std::stringstream ss(value());
         std::string m;
-        while (std::getline(ss, m, ',')) (a == "--methods" ? s.methods : s.scenes).push_back(m);
+        while (std::getline(ss, m, ','))
+          (a == "--methods" ? s.methods : a == "--scenes" ? s.scenes : s.axes).push_back(m);
       } else if (a == "--speed-seeds") {
         s.speed_seeds = std::atoi(value().c_str());
         if (s.speed_seeds < 1) throw mme::InputError("--speed-seeds must be a positive integer");
@@ -958,7 +966,8 @@ int main(int argc, char** argv) {
         std::fprintf(stderr,
                      "usage: bench_peers [--quick] [--out DIR] [--workers N] [--seeds N] [--seeds-200 N]\n"
                      "                   [--only speed,map,scaling] [--methods a,b,...] [--summary-only]\n"
-                     "                   [--scenes a,b,...] [--speed-seeds N] [--list-methods]\n");
+                     "                   [--scenes a,b,...] [--speed-seeds N] [--axes a,b,...]\n"
+                     "                   [--list-methods]\n");
         return 2;
       }
     }

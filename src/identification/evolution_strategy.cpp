@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/identification/threshold_search.h"
 
 namespace mme {
 
@@ -73,6 +74,7 @@ EvolutionStrategy::EvolutionStrategy(ParameterSpace space, const EsOptions& opti
       refiner_(Refiner::Create(options.refine_algorithm)) {
   const std::string bad = validateOptions(options_);
   if (!bad.empty()) throw InputError("evolution strategy: " + bad);
+  for (const Gene& g : space_.genes()) has_thresholds_ = has_thresholds_ || !g.breakpoints.empty();
   if (space_.size() == 0) throw InputError("the model has no free parameter to identify");
   operator_counts_.assign(7, 0);
   operator_successes_.assign(7, 0);
@@ -380,7 +382,39 @@ void EvolutionStrategy::refineBest() {
   from.genes = start.genes;
   from.cost = start.cost;
   from.steps = start.mutability;
-  const RefineResult result = refiner_->refine(*cost_, space_, from, settings, threadPool());
+  RefineResult result = refiner_->refine(*cost_, space_, from, settings, threadPool());
+  if (options_.refine_smooth_genes_only && has_thresholds_) {
+    // The thresholds the gradient refinement left alone: a discrete search over their flat
+    // intervals, then the smooth genes again for the new thresholds, while it pays.
+    uint64_t spent = result.evaluations;
+    const RefineStatus smooth_status = result.status;
+    for (int round = 0; round < kThresholdRounds; ++round) {
+      RefineSettings rest = settings;
+      rest.movable.clear();
+      rest.max_evaluations = settings.max_evaluations > spent ? settings.max_evaluations - spent : 0;
+      if (rest.max_evaluations == 0) break;
+      RefineStart at{result.genes, result.cost, start.mutability};
+      const RefineResult moved = searchThresholds(*cost_, space_, at, rest);
+      spent += moved.evaluations;
+      if (!(moved.cost < result.cost)) {
+        if (moved.cost <= result.cost) result.genes = moved.genes;  // centred in its interval
+        break;
+      }
+      result.genes = moved.genes;
+      result.cost = moved.cost;
+      rest.movable = settings.movable;
+      rest.max_evaluations = settings.max_evaluations > spent ? settings.max_evaluations - spent : 0;
+      at = {result.genes, result.cost, start.mutability};
+      const RefineResult again = refiner_->refine(*cost_, space_, at, rest, threadPool());
+      spent += again.evaluations;
+      if (again.cost < result.cost) {
+        result.genes = again.genes;
+        result.cost = again.cost;
+      }
+    }
+    result.evaluations = spent;
+    result.status = smooth_status;
+  }
   last_refine_status_ = result.status;
   evaluations_ += result.evaluations;
   if (result.evaluations == 0) return;

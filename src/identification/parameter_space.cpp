@@ -51,6 +51,35 @@ double maxObservedLength(const Model& model, const Trajectory& trajectory, int t
   return longest;
 }
 
+/// Observed lengths where a threshold of bond type `type` switches: its installed bonds' lengths,
+/// and for interactions of that type the distances of candidate pairs of their groups (frames
+/// strided so that at most ~4 million pairs are measured). Physical metres, unsorted.
+std::vector<double> thresholdLengths(const Model& model, const Trajectory& trajectory, int type) {
+  std::vector<double> out;
+  forEachObservedLength(model, trajectory, type, [&](double l) {
+    if (std::isfinite(l)) out.push_back(l);
+  });
+  const int frames = trajectory.numFrames();
+  for (const Interaction& in : model.interactions) {
+    if (in.type != type) continue;
+    std::vector<int> a, b;
+    for (size_t i = 0; i < model.particles.size(); ++i) {
+      if (model.particles[i].group == in.group_a) a.push_back(static_cast<int>(i));
+      if (model.particles[i].group == in.group_b) b.push_back(static_cast<int>(i));
+    }
+    const double pairs = static_cast<double>(a.size()) * static_cast<double>(b.size());
+    const int stride = std::max(1, static_cast<int>(std::ceil(pairs * frames / 4e6)));
+    for (int t = 0; t < frames; t += stride)
+      for (int i : a)
+        for (int j : b) {
+          if (i == j || trajectory.isOccluded(t, i) || trajectory.isOccluded(t, j)) continue;
+          const double l = (trajectory.position(t, j) - trajectory.position(t, i)).norm();
+          if (std::isfinite(l) && l > 0.0) out.push_back(l);
+        }
+  }
+  return out;
+}
+
 }  // namespace
 
 ParameterSpace::ParameterSpace(const Model& model, const Trajectory& trajectory) {
@@ -108,6 +137,22 @@ ParameterSpace::ParameterSpace(const Model& model, const Trajectory& trajectory)
       g.init_spread = range / 6.0;
     }
     g.init_center = std::min(std::max(g.init_center, g.lower), g.upper);
+    if (!g.smooth) {
+      std::vector<double> lengths = thresholdLengths(model, trajectory, ref.bond_type);
+      for (double& l : lengths) l = g.log_scale ? std::log(l) : l;
+      lengths.erase(std::remove_if(lengths.begin(), lengths.end(),
+                                   [&g](double v) { return !(v > g.lower && v < g.upper); }),
+                    lengths.end());
+      std::sort(lengths.begin(), lengths.end());
+      lengths.erase(std::unique(lengths.begin(), lengths.end()), lengths.end());
+      if (lengths.size() > kMaxBreakpoints) {
+        std::vector<double> kept(kMaxBreakpoints);
+        for (size_t q = 0; q < kMaxBreakpoints; ++q)
+          kept[q] = lengths[q * (lengths.size() - 1) / (kMaxBreakpoints - 1)];
+        lengths.swap(kept);
+      }
+      g.breakpoints = std::move(lengths);
+    }
     const int slot = is_gravity ? num_types : ref.bond_type;
     genes_of_type_[slot].push_back(static_cast<int>(genes_.size()));
     genes_.push_back(g);

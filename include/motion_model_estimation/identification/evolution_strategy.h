@@ -152,6 +152,9 @@ class EvolutionStrategy {
   std::unique_ptr<Refiner> refiner_;  ///< made from options_.refine_algorithm
   RefineStatus last_refine_status_ = RefineStatus::kNotRun;
   int refinements_ = 0;
+  bool has_thresholds_ = false;  ///< some gene has breakpoints (searchThresholds applies)
+  /// Threshold search / smooth refinement alternations per refinement at most.
+  static constexpr int kThresholdRounds = 3;
   /// Refinements stop here (setDeadline); default: never.
   std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
 };

@@ -24,6 +24,11 @@ struct Gene {
   /// (min_distance, max_distance): the cost is flat between the switching events, so gradient
   /// refinements leave them to the evolution strategy.
   bool smooth = true;
+  /// Thresholds only: the observed lengths where the condition switches (the bond lengths of
+  /// its type, or the pair distances of its interaction's groups, in the data), in search space,
+  /// ascending, within the bounds, at most kMaxBreakpoints (quantiles when there are more). The
+  /// cost is flat between two of them when a frame is one step.
+  std::vector<double> breakpoints;
   /// max_elongation (Provot's tau) is searched as the clamp length ln((1 + tau) L), with L the
   /// same type's rest length: the clamp acts where that length meets the longest observed bond,
   /// a point that does not move when L does. Physical tau = exp(gene) / L - 1.
@@ -38,6 +43,9 @@ struct Gene {
 /// guesses) and the observed data (average bond lengths for rest-length-like parameters).
 class ParameterSpace {
  public:
+  /// Most breakpoints kept per threshold gene.
+  static constexpr size_t kMaxBreakpoints = 4096;
+
   /// `trajectory` has the model's particles as markers (see remapMarkers).
   ParameterSpace(const Model& model, const Trajectory& trajectory);
 
