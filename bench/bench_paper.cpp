@@ -20,6 +20,8 @@
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/identifier.h"
 #include "motion_model_estimation/io/model_yaml.h"
+#include "motion_model_estimation/io/trajectory_io.h"
+#include "motion_model_estimation/io/trc.h"
 #include "motion_model_estimation/scenes/random_object.h"
 #include "motion_model_estimation/scenes/scenes.h"
 
@@ -47,8 +49,7 @@ Errors relativeErrors(const std::vector<double>& values, const std::vector<doubl
 /// The model as identification sees it: free values forgotten (bounds kept).
 Model forgetFreeValues(Model m) {
   for (const mme::ParamRef& r : mme::freeParameters(m)) {
-    mme::Param& p = r.bond_type >= 0 ? m.bond_types[r.bond_type].params[r.param]
-                                     : m.gravity_mps2[r.param];
+    mme::Param& p = mme::paramOf(m, r);
     p.has_value = false;
   }
   return m;
@@ -235,6 +236,68 @@ void randomObjectFiles(const Settings& s) {
   std::printf("wrote %s/random18_truth.yaml and random18_model.yaml\n", s.out_dir.c_str());
 }
 
+/// What a user gets by default (issue 13): random objects like random18 and soft objects hanging
+/// under gravity (springs stretched 2.4-20x their rest length), 10 seeds each, noiseless, each
+/// through a TRC file in millimetres, with a model file that gives no value and no bound for any
+/// free parameter; `identify`'s default engine (Preset::kDefault, whatever --preset says).
+void defaultsExperiment(const Settings& s) {
+  std::FILE* f = openCsv(s.out_dir + "/defaults.csv",
+                         "object,seed,unknowns,median_error_percent,max_error_percent,wall_s,"
+                         "generations,evaluations,bound_widenings,flagged,stop");
+  const int seeds = s.quick ? 2 : 10;
+  const std::string trc = s.out_dir + "/defaults_tmp.trc";
+  for (const std::string object : {"random18", "hanging16"}) {
+    std::vector<double> worst, times;
+    for (int seed = 1; seed <= seeds; ++seed) {
+      Model truth;
+      int frames = 0;
+      if (object == "random18") {
+        mme::RandomObjectSpec spec;  // 18 markers, 12 types, 40 bonds, 120 Hz
+        spec.seed = 100 + seed;
+        truth = mme::makeRandomObject(spec);
+        frames = 120;
+      } else {
+        mme::HangingObjectSpec spec;  // 16 markers (2 fixed), 8 damped types, 30 bonds, 120 Hz
+        spec.seed = 200 + seed;
+        truth = mme::makeHangingObject(spec);
+        frames = 300;
+      }
+      mme::writeTrc(trc, mme::simulateTrajectory(truth, frames, truth.frame_rate_hz), "mm");
+      const mme::Trajectory data = mme::readTrajectoryFile(trc);
+      Model blank = truth;
+      for (mme::BondType& t : blank.bond_types)
+        for (mme::Param& p : t.params) {
+          p.has_min = p.has_max = false;
+          p.min = -INFINITY;
+          p.max = INFINITY;
+        }
+      mme::IdentifyOptions o = mme::identifyOptionsFor(mme::Preset::kDefault);
+      o.es.threads = s.threads;
+      o.es.seed = s.seed;
+      o.estimate_std = false;
+      const RunResult r = runEs(blank, data, o, nullptr);
+      size_t flagged = 0;
+      for (mme::ParameterFlag flag : r.result.flags) flagged += flag != mme::ParameterFlag::kNone;
+      std::fprintf(f, "%s,%d,%zu,%.6g,%.6g,%.3f,%d,%llu,%d,%zu,%s\n", object.c_str(), seed,
+                   r.result.parameters.size(), r.errors.median, r.errors.max, r.result.wall_time_s,
+                   r.result.generations, static_cast<unsigned long long>(r.result.evaluations),
+                   r.result.bound_widenings, flagged, mme::identifyStopName(r.result.stop));
+      std::fflush(f);
+      std::printf("defaults: %s seed %2d: %zu unknowns, median %.2e %%, max %.2e %%, %.2f s, "
+                  "%d generations, %d widenings\n", object.c_str(), seed, r.result.parameters.size(),
+                  r.errors.median, r.errors.max, r.result.wall_time_s, r.result.generations,
+                  r.result.bound_widenings);
+      worst.push_back(r.errors.max);
+      times.push_back(r.result.wall_time_s);
+    }
+    std::printf("defaults: %s: worst max error %.2e %%, slowest %.2f s over %d seeds\n",
+                object.c_str(), *std::max_element(worst.begin(), worst.end()),
+                *std::max_element(times.begin(), times.end()), seeds);
+  }
+  std::remove(trc.c_str());
+  std::fclose(f);
+}
+
 int compare(const std::string& truth_path, const std::string& estimate_path) {
   const Model truth = mme::loadModelFile(truth_path);
   const Model estimate = mme::loadModelFile(estimate_path);
@@ -279,7 +342,7 @@ int main(int argc, char** argv) {
       else if (a == "--seed" && i + 1 < argc) s.seed = std::strtoull(argv[++i], nullptr, 10);
       else {
         std::fprintf(stderr, "usage: bench_paper [--quick] [--out-dir DIR] [--threads T] "
-                             "[--only fig1,table1,table2,scaling,random18]\n"
+                             "[--only fig1,table1,table2,scaling,random18,defaults]\n"
                              "       [--generations N] [--refine-start G] [--refine-period G]\n"
                              "       [--refine-evaluations E] [--refine ALGORITHM] [--seed S]\n"
                              "       [--preset paper|default] (default: paper)\n"
@@ -292,6 +355,7 @@ int main(int argc, char** argv) {
                         "max_error_percent,generations,generations_to_0.01pct,evaluations,"
                         "wall_s,global_cost");
     if (s.wants("random18")) randomObjectFiles(s);
+    if (s.wants("defaults")) defaultsExperiment(s);
     if (s.wants("table1")) table1(s);
     if (s.wants("fig1")) figure1(s);
     if (s.wants("table2")) table2(s);

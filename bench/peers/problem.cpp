@@ -29,8 +29,7 @@ Errors relativeErrors(const std::vector<double>& values, const std::vector<doubl
 
 mme::Model forgetFreeValues(mme::Model m) {
   for (const mme::ParamRef& r : mme::freeParameters(m)) {
-    mme::Param& p = r.bond_type >= 0 ? m.bond_types[r.bond_type].params[r.param]
-                                     : m.gravity_mps2[r.param];
+    mme::Param& p = mme::paramOf(m, r);
     p.has_value = false;
   }
   return m;

@@ -93,14 +93,20 @@ std::vector<ParamRef> collect(const Model& model, bool free_only) {
 std::vector<ParamRef> freeParameters(const Model& model) { return collect(model, true); }
 std::vector<ParamRef> presentParameters(const Model& model) { return collect(model, false); }
 
-double getParam(const Model& model, const ParamRef& ref) {
-  if (ref.bond_type < 0) return model.gravity_mps2[ref.param].value;
-  return model.bond_types[ref.bond_type].params[ref.param].value;
+Param& paramOf(Model& model, const ParamRef& ref) {
+  return ref.bond_type < 0 ? model.gravity_mps2[ref.param]
+                           : model.bond_types[ref.bond_type].params[ref.param];
 }
 
+const Param& paramOf(const Model& model, const ParamRef& ref) {
+  return ref.bond_type < 0 ? model.gravity_mps2[ref.param]
+                           : model.bond_types[ref.bond_type].params[ref.param];
+}
+
+double getParam(const Model& model, const ParamRef& ref) { return paramOf(model, ref).value; }
+
 void setParam(Model& model, const ParamRef& ref, double value) {
-  Param& p = ref.bond_type < 0 ? model.gravity_mps2[ref.param]
-                               : model.bond_types[ref.bond_type].params[ref.param];
+  Param& p = paramOf(model, ref);
   p.value = value;
   p.has_value = true;
   p.present = true;

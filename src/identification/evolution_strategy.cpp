@@ -290,10 +290,21 @@ void EvolutionStrategy::setInitialGuess(const std::vector<double>& genes, double
   initial_guess_spread_ = spread_fraction;
 }
 
+void EvolutionStrategy::setSeeds(std::vector<std::vector<double>> seeds) {
+  for (const std::vector<double>& genes : seeds)
+    if (genes.size() != space_.size())
+      throw InputError("seed has " + std::to_string(genes.size()) + " genes, expected " +
+                       std::to_string(space_.size()));
+  seeds_ = std::move(seeds);
+}
+
 void EvolutionStrategy::initialise() {
   population_.clear();
   for (int i = 0; i < options_.population; ++i) {
     Individual ind = makeRandom();
+    if (static_cast<size_t>(i) < seeds_.size()) {
+      for (size_t k = 0; k < space_.size(); ++k) ind.genes[k] = space_.reflect(k, seeds_[i][k]);
+    }
     if (!initial_guess_.empty()) {
       for (size_t k = 0; k < space_.size(); ++k) {
         const Gene& g = space_.gene(k);

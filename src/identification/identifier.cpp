@@ -3,12 +3,15 @@
 #include <Eigen/Dense>
 
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <limits>
 #include <memory>
 
 #include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/identification/equation_error.h"
+#include "motion_model_estimation/identification/levenberg_marquardt.h"
 
 namespace mme {
 
@@ -40,47 +43,114 @@ const char* identifyStopName(IdentifyStop stop) {
 }
 
 std::vector<double> estimateStdDevs(const Cost& cost, const ParameterSpace& space,
-                                    const std::vector<double>& genes) {
+                                    const std::vector<double>& genes, ThreadPool* pool) {
+  // Gauss-Newton: Cov(genes) = s^2 (J^T J)^-1 with s^2 = cost / (residuals - genes), J the
+  // residuals' Jacobian over the smooth genes (a threshold has no slope: no std).
   const size_t n = genes.size();
   std::vector<double> out(n, std::numeric_limits<double>::quiet_NaN());
-  const double dof = 3.0 * static_cast<double>(cost.termCount()) - static_cast<double>(n);
-  if (n == 0 || dof <= 0) return out;
-  auto f = [&](const std::vector<double>& g) { return cost.evaluate(space.toPhysical(g), nullptr); };
-  const double f0 = f(genes);
-  std::vector<double> h(n);
+  std::vector<size_t> active;
   for (size_t k = 0; k < n; ++k)
-    h[k] = 1e-4 * std::max(1.0, std::abs(genes[k])) * (space.gene(k).log_scale ? 0.1 : 1.0);
-  Eigen::MatrixXd hess(n, n);
-  std::vector<double> g = genes;
-  for (size_t i = 0; i < n; ++i) {
-    g[i] = genes[i] + h[i]; const double fp = f(g);
-    g[i] = genes[i] - h[i]; const double fm = f(g);
-    g[i] = genes[i];
-    hess(i, i) = (fp - 2.0 * f0 + fm) / (h[i] * h[i]);
-    for (size_t j = 0; j < i; ++j) {
-      double s = 0.0;
-      for (int a : {1, -1})
-        for (int b : {1, -1}) {
-          g[i] = genes[i] + a * h[i];
-          g[j] = genes[j] + b * h[j];
-          s += a * b * f(g);
-        }
-      g[i] = genes[i];
-      g[j] = genes[j];
-      hess(i, j) = hess(j, i) = s / (4.0 * h[i] * h[j]);
-    }
-  }
-  Eigen::LDLT<Eigen::MatrixXd> ldlt(hess);
+    if (space.gene(k).smooth) active.push_back(k);
+  const double dof = static_cast<double>(cost.residualCount()) - static_cast<double>(n);
+  if (active.empty() || dof <= 0) return out;
+  std::vector<double> r;
+  const double c = cost.residuals(space.toPhysical(genes), &r);
+  if (!std::isfinite(c)) return out;
+  const Eigen::VectorXd residual = Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
+  detail::JacobianColumns jac;
+  if (!detail::forwardJacobian(cost, space, genes, residual, active, 100000000, pool, &jac))
+    return out;
+  Eigen::MatrixXd jtj;
+  Eigen::VectorXd g;
+  detail::normalEquations(jac, residual, &jtj, &g);
+  const Eigen::Index na = static_cast<Eigen::Index>(active.size());
+  Eigen::VectorXd scale(na);
+  for (Eigen::Index j = 0; j < na; ++j) scale[j] = jtj(j, j) > 0.0 ? 1.0 / std::sqrt(jtj(j, j)) : 0.0;
+  const Eigen::MatrixXd scaled = scale.asDiagonal() * jtj * scale.asDiagonal();
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(scaled);
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return out;
-  const Eigen::MatrixXd inv = ldlt.solve(Eigen::MatrixXd::Identity(n, n));
-  const double s2 = std::max(f0, 0.0) / dof;
-  for (size_t k = 0; k < n; ++k) {
-    if (!(inv(k, k) >= 0.0)) continue;
-    const double gene_std = std::sqrt(2.0 * s2 * inv(k, k));
+  const Eigen::MatrixXd inv = ldlt.solve(Eigen::MatrixXd::Identity(na, na));
+  const double s2 = std::max(c, 0.0) / dof;
+  for (Eigen::Index j = 0; j < na; ++j) {
+    const size_t k = active[static_cast<size_t>(j)];
+    if (!(scale[j] > 0.0) || !(inv(j, j) >= 0.0)) continue;
+    const double gene_std = std::sqrt(s2 * inv(j, j)) * scale[j];
     // Log genes: d(value) = value d(gene); a clamp-length gene: d(tau) = (1 + tau) d(gene).
     out[k] = std::abs(space.physicalSlope(k, genes)) * gene_std;
   }
   return out;
+}
+
+namespace {
+
+/// Share of a gene's distance to a bound under which it counts as at the bound: 1 % of the
+/// value for log genes, 1 % of the range for linear ones.
+constexpr double kAtBoundShare = 0.01;
+/// A default bound the answer reached moves this far out (a factor for log genes, ranges for
+/// linear ones).
+constexpr double kWidenFactor = 10.0;
+
+std::string formatValue(double v) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.6g", v);
+  return text;
+}
+
+/// -1 at the lower bound, +1 at the upper, 0 inside.
+int atBound(const Gene& g, double gene) {
+  const double tolerance = g.log_scale ? std::log1p(kAtBoundShare) : kAtBoundShare * (g.upper - g.lower);
+  if (gene - g.lower <= tolerance) return -1;
+  if (g.upper - gene <= tolerance) return 1;
+  return 0;
+}
+
+/// Equation-error starts (raw and smoothed differences) as gene vectors; a value outside a
+/// default bound widens it (beyond a user's bound it is clamped), an undetermined one is left
+/// at the initial distribution's centre. Notes what it widened.
+std::vector<std::vector<double>> equationErrorSeeds(const Model& model, const Trajectory& trajectory,
+                                                    ParameterSpace* space,
+                                                    std::vector<std::string>* notes) {
+  std::vector<std::vector<double>> seeds;
+  for (int half_width : {0, 3}) {
+    EquationErrorOptions o;
+    o.smoothing_half_width = half_width;
+    const EquationErrorResult ee = solveEquationError(model, trajectory, o);
+    if (!ee.applicable) break;
+    std::vector<double> genes(space->size());
+    for (size_t k = 0; k < space->size(); ++k) {
+      const Gene& g = space->gene(k);
+      const double v = ee.values[k];
+      const bool usable = std::isfinite(v) && (!g.log_scale || v > 0.0) && !g.clamp_length;
+      if (!usable) {
+        genes[k] = g.init_center;
+        continue;
+      }
+      const double gene = g.log_scale ? std::log(v) : v;
+      double lo = g.lower, hi = g.upper;
+      const double margin = g.log_scale ? std::log(3.0) : 0.5 * (hi - lo);
+      if (gene < lo && !g.user_lower) lo = gene - margin;
+      if (gene > hi && !g.user_upper) hi = gene + margin;
+      if (lo != g.lower || hi != g.upper) {
+        notes->push_back("'" + g.ref.name + "': the equation-error start " + formatValue(v) +
+                         " lies outside the default search bounds: bounds widened to include it");
+        space->setBounds(k, lo, hi);
+      }
+      genes[k] = std::min(std::max(gene, space->gene(k).lower), space->gene(k).upper);
+    }
+    seeds.push_back(std::move(genes));
+  }
+  return seeds;
+}
+
+}  // namespace
+
+const char* parameterFlagName(ParameterFlag flag) {
+  switch (flag) {
+    case ParameterFlag::kNone: return "";
+    case ParameterFlag::kAtLowerBound: return "at_lower_bound";
+    case ParameterFlag::kAtUpperBound: return "at_upper_bound";
+  }
+  return "?";
 }
 
 IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
@@ -93,60 +163,121 @@ IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
   if (cost->termCount() == 0)
     throw InputError("no usable (particle, frame) terms: too few frames or everything occluded");
   ParameterSpace space(model, trajectory);
-  EvolutionStrategy es(space, options.es);
-  es.setCost(cost);
-  if (options.max_wall_time_s > 0.0)
-    es.setDeadline(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                               std::chrono::duration<double>(options.max_wall_time_s)));
+  std::vector<std::string> notes, seed_notes;
+  std::vector<std::vector<double>> seeds;
+  if (options.equation_error_start)
+    seeds = equationErrorSeeds(model, trajectory, &space, &seed_notes);
   auto elapsed = [&start]() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
+  const auto note = [&](const std::string& text, int generation, uint64_t evaluations) {
+    notes.push_back(text);
+    if (!progress) return;
+    Progress p;
+    p.generation = generation;
+    p.evaluations = evaluations;
+    p.wall_time_s = elapsed();
+    p.message = text;
+    progress(p);
+  };
+  for (const std::string& text : seed_notes) note(text, 0, 0);
   // Convergence: the best cost no longer falls (relative 1e-9) or sits at the round-off floor.
   const double floor_m2 = 1e-26 * static_cast<double>(cost->residualCount());
-  double reference_cost = std::numeric_limits<double>::infinity();
-  int last_fall_generation = 0;
   IdentifyStop stop = IdentifyStop::kGenerations;
-  for (int g = 0; g < options.generations; ++g) {
-    es.step();
-    if (progress) {
-      Progress p;
-      p.generation = es.generation();
-      p.evaluations = es.evaluations();
-      p.best_cost = es.best().cost;
-      p.wall_time_s = elapsed();
-      p.best_values = es.bestValues();
-      progress(p);
+  int generations_done = 0;
+  uint64_t evaluations_done = 0;
+  int widenings = 0;
+  std::unique_ptr<EvolutionStrategy> es;
+  while (true) {
+    // One search; when its answer ends on a default bound, the bound is widened and the search
+    // resumes from that answer (a bounded number of times).
+    es = std::make_unique<EvolutionStrategy>(space, options.es);
+    es->setCost(cost);
+    es->setSeeds(seeds);
+    if (options.max_wall_time_s > 0.0)
+      es->setDeadline(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                  std::chrono::duration<double>(options.max_wall_time_s)));
+    double reference_cost = std::numeric_limits<double>::infinity();
+    int last_fall_generation = 0;
+    stop = IdentifyStop::kGenerations;
+    while (generations_done + es->generation() < options.generations) {
+      es->step();
+      const double best = es->best().cost;
+      if (progress) {
+        Progress p;
+        p.generation = generations_done + es->generation();
+        p.evaluations = evaluations_done + es->evaluations();
+        p.best_cost = best;
+        p.wall_time_s = elapsed();
+        p.best_values = es->bestValues();
+        progress(p);
+      }
+      if (best < reference_cost * (1.0 - 1e-9) && reference_cost > floor_m2) {
+        reference_cost = best;
+        last_fall_generation = es->generation();
+      }
+      if (options.target_cost > 0.0 && best <= options.target_cost) {
+        stop = IdentifyStop::kTargetCost;
+        break;
+      }
+      if (options.max_wall_time_s > 0.0 && elapsed() >= options.max_wall_time_s) {
+        stop = IdentifyStop::kWallTime;
+        break;
+      }
+      if (options.patience_generations > 0 && es->refinements() > 0 &&
+          es->generation() - last_fall_generation >= options.patience_generations) {
+        stop = IdentifyStop::kConverged;
+        break;
+      }
     }
-    const double best = es.best().cost;
-    if (best < reference_cost * (1.0 - 1e-9) && reference_cost > floor_m2) {
-      reference_cost = best;
-      last_fall_generation = es.generation();
-    }
-    if (options.target_cost > 0.0 && best <= options.target_cost) {
-      stop = IdentifyStop::kTargetCost;
+    generations_done += es->generation();
+    evaluations_done += es->evaluations();
+    if (stop == IdentifyStop::kTargetCost || stop == IdentifyStop::kWallTime ||
+        widenings >= options.max_bound_widenings)
       break;
+    const std::vector<double> best = es->best().genes;
+    bool widened = false;
+    for (size_t k = 0; k < space.size(); ++k) {
+      const Gene& g = space.gene(k);
+      if (!g.smooth || g.clamp_length) continue;
+      const int side = atBound(g, best[k]);
+      if (side == 0 || (side < 0 ? g.user_lower : g.user_upper)) continue;
+      const double step = g.log_scale ? std::log(kWidenFactor) : (kWidenFactor - 1.0) * (g.upper - g.lower);
+      const double lo = side < 0 ? g.lower - step : g.lower, hi = side > 0 ? g.upper + step : g.upper;
+      const double value = space.toPhysical(best)[k];
+      const std::string name = g.ref.name;
+      const bool log_scale = g.log_scale;
+      space.setBounds(k, lo, hi);
+      const Gene& wide = space.gene(k);
+      note("'" + name + "' ended at its default " + (side < 0 ? "lower" : "upper") +
+               " search bound (" + formatValue(value) + "): bounds widened to [" +
+               formatValue(log_scale ? std::exp(wide.lower) : wide.lower) + ", " +
+               formatValue(log_scale ? std::exp(wide.upper) : wide.upper) + "], search resumed",
+           generations_done, evaluations_done);
+      widened = true;
     }
-    if (options.max_wall_time_s > 0.0 && elapsed() >= options.max_wall_time_s) {
-      stop = IdentifyStop::kWallTime;
-      break;
-    }
-    if (options.patience_generations > 0 && es.refinements() > 0 &&
-        es.generation() - last_fall_generation >= options.patience_generations) {
-      stop = IdentifyStop::kConverged;
-      break;
-    }
+    if (!widened) break;
+    ++widenings;
+    seeds.insert(seeds.begin(), best);
   }
   IdentifyResult r;
   r.parameters = space.refs();
-  r.values = es.bestValues();
-  r.global_cost = es.best().cost;
-  r.generations = es.generation();
-  r.evaluations = es.evaluations();
+  r.values = es->bestValues();
+  r.global_cost = es->best().cost;
+  r.generations = generations_done;
+  r.evaluations = evaluations_done;
   r.frames = trajectory.numFrames();
   r.stop = stop;
-  r.last_refine_status = es.lastRefineStatus();
+  r.last_refine_status = es->lastRefineStatus();
+  r.bound_widenings = widenings;
+  r.notes = notes;
+  r.flags.assign(r.values.size(), ParameterFlag::kNone);
+  for (size_t k = 0; k < space.size(); ++k) {
+    const int side = atBound(space.gene(k), es->best().genes[k]);
+    if (side != 0) r.flags[k] = side < 0 ? ParameterFlag::kAtLowerBound : ParameterFlag::kAtUpperBound;
+  }
   r.std_devs = options.estimate_std
-                   ? estimateStdDevs(*cost, space, es.best().genes)
+                   ? estimateStdDevs(*cost, space, es->best().genes)
                    : std::vector<double>(r.values.size(), std::numeric_limits<double>::quiet_NaN());
   r.model = model;
   setValues(r.model, r.parameters, r.values);

@@ -86,6 +86,49 @@ void normalEquations(const JacobianColumns& jac, const Eigen::VectorXd& residual
   *jtj = std::move(full);
 }
 
+bool forwardJacobian(const Cost& cost, const ParameterSpace& space, const std::vector<double>& x,
+                     const Eigen::VectorXd& residual, const std::vector<size_t>& active,
+                     uint64_t max_entries, ThreadPool* pool, JacobianColumns* jac) {
+  const size_t n = active.size();
+  const size_t m = static_cast<size_t>(residual.size());
+  jac->rows_count = m;
+  jac->rows.resize(n);
+  jac->values.resize(n);
+  // Steps relative to the gene, or to its range near 0, inward at a bound.
+  std::vector<double> steps(n);
+  for (size_t j = 0; j < n; ++j) {
+    const Gene& g = space.gene(active[j]);
+    const double xj = x[active[j]];
+    double h = 1e-7 * std::max({std::fabs(xj), 1e-3 * (g.upper - g.lower), 1e-8});
+    if (xj + h > g.upper) h = -h;
+    steps[j] = h;
+  }
+  std::atomic<uint64_t> stored{0};
+  std::atomic<bool> too_large{false};
+  const auto column = [&](size_t j) {
+    thread_local std::vector<double> genes, rk;
+    genes = x;
+    genes[active[j]] += steps[j];
+    double cj = 0.0;
+    std::vector<uint32_t>& rows = jac->rows[j];
+    std::vector<double>& values = jac->values[j];
+    rows.clear();
+    values.clear();
+    // A column whose model blew up is left empty: that gene is held this iteration.
+    if (!residualsAt(cost, space, genes, &rk, &cj)) return;
+    for (size_t i = 0; i < m; ++i) {
+      const double d = rk[i] - residual[static_cast<Eigen::Index>(i)];
+      if (d == 0.0) continue;
+      rows.push_back(static_cast<uint32_t>(i));
+      values.push_back(d / steps[j]);
+    }
+    if ((stored += rows.size()) > max_entries) too_large = true;
+  };
+  if (pool) pool->parallelFor(n, column);
+  else for (size_t j = 0; j < n; ++j) column(j);
+  return !too_large;
+}
+
 }  // namespace detail
 
 LmResult levenbergMarquardt(const Cost& cost, const ParameterSpace& space,
@@ -126,12 +169,10 @@ LmResult levenbergMarquardt(const Cost& cost, const ParameterSpace& space,
   jac.rows_count = m;
   jac.rows.resize(n);
   jac.values.resize(n);
-  std::atomic<uint64_t> stored{0};
-  std::atomic<bool> too_large{false};
+  bool too_large = false;
   Eigen::VectorXd residual =
       Eigen::Map<const Eigen::VectorXd>(r0.data(), static_cast<Eigen::Index>(m));
   std::vector<double> x = start, trial = start, r_trial;
-  std::vector<double> steps(n);
   std::vector<double> cost_after{out.cost};  // the start, then after each Jacobian's step
   double mu = -1.0, nu = 2.0;
   const auto now = []() { return std::chrono::steady_clock::now(); };
@@ -156,35 +197,9 @@ LmResult levenbergMarquardt(const Cost& cost, const ParameterSpace& space,
       out.status = RefineStatus::kConverged;  // an exact fit
       break;
     }
-    // Forward-difference Jacobian, stepping inward at a bound.
-    for (size_t j = 0; j < n; ++j) {
-      const double xj = x[active[j]];
-      double h = 1e-7 * std::max({std::fabs(xj), 1e-3 * (hi[j] - lo[j]), 1e-8});
-      if (xj + h > hi[j]) h = -h;
-      steps[j] = h;
-    }
-    stored = 0;
-    const auto column = [&](size_t j) {
-      thread_local std::vector<double> genes, rk;
-      genes = x;
-      genes[active[j]] += steps[j];
-      double cj = 0.0;
-      std::vector<uint32_t>& rows = jac.rows[j];
-      std::vector<double>& values = jac.values[j];
-      rows.clear();
-      values.clear();
-      // A column whose model blew up is left empty: that gene is held this iteration.
-      if (!residualsAt(cost, space, genes, &rk, &cj)) return;
-      for (size_t i = 0; i < m; ++i) {
-        const double d = rk[i] - residual[static_cast<Eigen::Index>(i)];
-        if (d == 0.0) continue;
-        rows.push_back(static_cast<uint32_t>(i));
-        values.push_back(d / steps[j]);
-      }
-      if ((stored += rows.size()) > settings.max_jacobian_entries) too_large = true;
-    };
-    if (pool) pool->parallelFor(n, column);
-    else for (size_t j = 0; j < n; ++j) column(j);
+    if (!detail::forwardJacobian(cost, space, x, residual, active, settings.max_jacobian_entries,
+                                 pool, &jac))
+      too_large = true;
     out.evaluations += n;
     ++out.jacobians;
     if (too_large) {

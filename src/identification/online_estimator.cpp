@@ -173,8 +173,7 @@ bool OnlineEstimator::update() {
       std::vector<double> values;
       for (size_t k = 0; k < es_->space().size(); ++k) {
         const ParamRef& ref = es_->space().gene(k).ref;
-        const Param& p = ref.bond_type >= 0 ? model.bond_types[ref.bond_type].params[ref.param]
-                                            : model.gravity_mps2[ref.param];
+        const Param& p = paramOf(model, ref);
         if (!p.has_value) break;
         values.push_back(p.value);
       }

@@ -88,14 +88,17 @@ ParameterSpace::ParameterSpace(const Model& model, const Trajectory& trajectory)
   sites_of_type_.assign(num_types + 1, {});
 
   for (const ParamRef& ref : freeParameters(model)) {
-    const Param& p = ref.bond_type >= 0 ? model.bond_types[ref.bond_type].params[ref.param]
-                                        : model.gravity_mps2[ref.param];
+    const Param& p = paramOf(model, ref);
     Gene g;
     g.ref = ref;
     g.has_initial = p.has_value;
     const bool is_gravity = ref.bond_type < 0;
     g.smooth = is_gravity || (ref.param != kMinDistance && ref.param != kMaxDistance);
-    g.log_scale = !is_gravity && isPositivePhysical(ref.param) && !(p.has_min && p.min <= 0.0);
+    // Positive physical parameters are searched in log space; `min: 0` (non-negative) keeps
+    // them there with the default lower bound (a value of exactly 0 is not representable, a
+    // value 1e-8 of the range is).
+    g.log_scale = !is_gravity && isPositivePhysical(ref.param);
+    const bool user_min = p.has_min && !(g.log_scale && p.min <= 0.0);
     // Physical bounds: the model's when given, else defaults scaled by what is known.
     double lo, hi;
     const double observed =
@@ -113,12 +116,15 @@ ParameterSpace::ParameterSpace(const Model& model, const Trajectory& trajectory)
     } else {
       lo = 1e-4; hi = 1e4;
     }
-    if (p.has_min) lo = p.min;
+    if (user_min) lo = p.min;
     if (p.has_max) hi = p.max;
     if (g.log_scale) {
       lo = std::max(lo, 1e-12);
+      if (!user_min && p.has_max && !(lo < hi)) lo = hi * 1e-8;  // min: 0 below a small max
       if (!(hi > lo)) hi = lo * 10.0;
     }
+    g.user_lower = user_min;
+    g.user_upper = p.has_max;
     if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi))
       throw InputError("parameter '" + ref.name + "': empty or infinite search bounds");
     g.lower = g.log_scale ? std::log(lo) : lo;
@@ -216,6 +222,18 @@ ParameterSpace::ParameterSpace(const Model& model, const Trajectory& trajectory)
     sites_of_type_[t].assign(sites[t].begin(), sites[t].end());
     if (!genes_of_type_[t].empty()) types_with_genes_.push_back(t);
   }
+}
+
+void ParameterSpace::setBounds(size_t k, double lower, double upper) {
+  Gene& g = genes_.at(k);
+  if (!(upper > lower) || !std::isfinite(lower) || !std::isfinite(upper))
+    throw InputError("parameter '" + g.ref.name + "': empty or infinite search bounds");
+  g.lower = lower;
+  g.upper = upper;
+  g.init_center = std::min(std::max(g.init_center, lower), upper);
+  auto outside = [&g](double v) { return !(v > g.lower && v < g.upper); };
+  g.breakpoints.erase(std::remove_if(g.breakpoints.begin(), g.breakpoints.end(), outside),
+                      g.breakpoints.end());
 }
 
 std::vector<ParamRef> ParameterSpace::refs() const {

@@ -884,6 +884,21 @@ std::string modelToYaml(const Model& model, const IdentificationInfo* info) {
     out << YAML::Key << "generations" << YAML::Value << info->generations;
     out << YAML::Key << "wall_time_s" << YAML::Value;
     emitNumber(out, info->wall_time_s);
+    if (!info->flags.empty()) {
+      out << YAML::Key << "flags" << YAML::Value << YAML::BeginMap;
+      for (const auto& [name, flag] : info->flags) {
+        out << YAML::Key;
+        emitName(out, name);
+        out << YAML::Value;
+        emitName(out, flag);
+      }
+      out << YAML::EndMap;
+    }
+    if (!info->notes.empty()) {
+      out << YAML::Key << "notes" << YAML::Value << YAML::BeginSeq;
+      for (const std::string& text : info->notes) out << YAML::DoubleQuoted << text;
+      out << YAML::EndSeq;
+    }
     out << YAML::EndMap;
   }
   out << YAML::EndMap;

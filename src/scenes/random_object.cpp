@@ -91,4 +91,85 @@ Model makeRandomObject(const RandomObjectSpec& spec) {
   return model;
 }
 
+Model makeHangingObject(const HangingObjectSpec& spec) {
+  const int n = spec.particles;
+  if (n < 3 || spec.bond_types < 1 || spec.bonds < n - 1 || spec.bonds < spec.bond_types ||
+      spec.bonds > n * (n - 1) / 2 || !(spec.frame_rate_hz > 0.0) ||
+      !(spec.min_stretch >= 1.0 && spec.max_stretch >= spec.min_stretch))
+    throw InputError("hanging object: impossible spec (need particles >= 3, bonds >= particles-1, "
+                     "bonds >= bond_types, 1 <= min_stretch <= max_stretch)");
+  Random random(spec.seed);
+  Model model;
+  model.frame_rate_hz = spec.frame_rate_hz;
+  model.frame_id = "world";
+  for (int c = 0; c < 3; ++c) model.gravity_mps2[c] = Param{c == 2 ? -9.81 : 0.0, true, true};
+  char name[32];
+  for (int i = 0; i < n; ++i) {
+    Particle p;
+    std::snprintf(name, sizeof(name), "h%02d", i);
+    p.name = name;
+    if (i < 2) {  // the two fixed suspension points
+      p.fixed = true;
+      p.position_m = Eigen::Vector3d(i == 0 ? -0.1 : 0.1, 0.0, 0.0);
+    } else {
+      p.mass_kg = 0.02 + 0.08 * random.uniform();
+      p.position_m = Eigen::Vector3d(0.3 * (random.uniform() - 0.5), 0.1 * (random.uniform() - 0.5),
+                                     -0.02 - 0.28 * random.uniform());
+      for (int c = 0; c < 3; ++c) p.velocity_mps[c] = 0.2 * (random.uniform() - 0.5);
+    }
+    model.particles.push_back(p);
+  }
+  // Bonds: each free particle to its nearest earlier one (the fixed pair first: connected to the
+  // suspension), then the shortest remaining pairs that do not join the two fixed points.
+  std::set<std::pair<int, int>> used{{0, 1}};
+  std::vector<std::pair<int, int>> pairs;
+  auto dist = [&](int a, int b) {
+    return (model.particles[a].position_m - model.particles[b].position_m).norm();
+  };
+  for (int i = 2; i < n; ++i) {
+    int best = 0;
+    for (int j = 1; j < i; ++j)
+      if (dist(i, j) < dist(i, best)) best = j;
+    pairs.emplace_back(best, i);
+    used.insert({best, i});
+  }
+  std::vector<std::pair<double, std::pair<int, int>>> rest;
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b)
+      if (!used.count({a, b})) rest.push_back({dist(a, b), {a, b}});
+  std::sort(rest.begin(), rest.end());
+  for (size_t k = 0; static_cast<int>(pairs.size()) < spec.bonds && k < rest.size(); ++k)
+    pairs.push_back(rest[k].second);
+  for (size_t k = pairs.size(); k > 1; --k) std::swap(pairs[k - 1], pairs[random.index(static_cast<int>(k))]);
+  std::vector<double> type_length_sum(spec.bond_types, 0.0);
+  std::vector<int> type_count(spec.bond_types, 0);
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    const int t = static_cast<int>(k % spec.bond_types);
+    type_length_sum[t] += dist(pairs[k].first, pairs[k].second);
+    ++type_count[t];
+    Bond bond;
+    bond.type = t;
+    bond.particles = {{pairs[k].first, pairs[k].second, -1}};
+    model.bonds.push_back(bond);
+  }
+  const double log_stretch = std::log(spec.max_stretch / spec.min_stretch);
+  for (int t = 0; t < spec.bond_types; ++t) {
+    BondType type;
+    std::snprintf(name, sizeof(name), "d%02d", t);
+    type.name = name;
+    type.kind = BondKind::kSpring;
+    // Soft (weights of 0.02-0.1 kg stretch them far), damped, and short at rest: the type's
+    // bonds start at min_stretch..max_stretch times the rest length.
+    const double stretch = spec.min_stretch * std::exp(log_stretch * random.uniform());
+    const double k = 2.0 * std::exp(std::log(10.0) * random.uniform());     // [2, 20] N/m
+    const double c = 0.02 * std::exp(std::log(15.0) * random.uniform());    // [0.02, 0.3] N s/m
+    const double length = type_length_sum[t] / type_count[t] / stretch;
+    type.param(kStiffness) = Param{k, true, true, true};
+    type.param(kRestLength) = Param{length, true, true, true};
+    type.param(kDamping) = Param{c, true, true, true};
+    model.bond_types.push_back(type);
+  }
+  return model;
+}
+
 }  // namespace mme

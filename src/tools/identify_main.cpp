@@ -97,8 +97,7 @@ int run(int argc, char** argv) {
   if (compare) {
     // The file's values are the truth to compare with, not initial guesses.
     for (const mme::ParamRef& ref : mme::freeParameters(model)) {
-      mme::Param& p = ref.bond_type >= 0 ? model.bond_types[ref.bond_type].params[ref.param]
-                                         : model.gravity_mps2[ref.param];
+      mme::Param& p = mme::paramOf(model, ref);
       p.has_value = false;
     }
   }
@@ -129,6 +128,10 @@ int run(int argc, char** argv) {
   const bool tty = isatty(STDOUT_FILENO);
   double last_print_s = -1.0;
   auto progress = [&](const mme::Progress& p) {
+    if (!p.message.empty()) {  // notices go to stderr even with --quiet
+      std::fprintf(stderr, "%sidentify: %s\n", tty && !quiet ? "\n" : "", p.message.c_str());
+      return;
+    }
     if (quiet) return;
     const bool last = p.generation == options.generations;
     if (!last && p.wall_time_s - last_print_s < (tty ? 0.2 : 2.0)) return;
@@ -150,14 +153,11 @@ int run(int argc, char** argv) {
 
   std::printf("\n%-28s %16s %12s", "parameter", "value", "std");
   if (compare) std::printf(" %16s %10s", "true", "error %");
-  std::printf("\n");
+  std::printf("  %s\n", "flag");
   for (size_t k = 0; k < r.parameters.size(); ++k) {
     std::printf("%-28s %16.9g %12.3g", r.parameters[k].name.c_str(), r.values[k], r.std_devs[k]);
     if (compare) {
-      const mme::Param& p = r.parameters[k].bond_type >= 0
-                                ? reference.bond_types[r.parameters[k].bond_type]
-                                      .params[r.parameters[k].param]
-                                : reference.gravity_mps2[r.parameters[k].param];
+      const mme::Param& p = mme::paramOf(reference, r.parameters[k]);
       if (p.has_value) {
         const double err = p.value != 0.0 ? 100.0 * (r.values[k] - p.value) / std::abs(p.value)
                                           : std::nan("");
@@ -166,7 +166,7 @@ int run(int argc, char** argv) {
         std::printf(" %16s %10s", "-", "-");
       }
     }
-    std::printf("\n");
+    std::printf("  %s\n", mme::parameterFlagName(r.flags[k]));
   }
   std::printf("global cost %.6e m^2 over %d frames, %d generations, %llu evaluations, %.2f s\n",
               r.global_cost, r.frames, r.generations,
@@ -181,11 +181,22 @@ int run(int argc, char** argv) {
   info.frames = r.frames;
   info.generations = r.generations;
   info.wall_time_s = r.wall_time_s;
-  for (size_t k = 0; k < r.parameters.size(); ++k)
+  size_t flagged = 0;
+  for (size_t k = 0; k < r.parameters.size(); ++k) {
     if (std::isfinite(r.std_devs[k])) {
       info.std_names.push_back(r.parameters[k].name);
       info.std_values.push_back(r.std_devs[k]);
     }
+    if (r.flags[k] != mme::ParameterFlag::kNone) {
+      info.flags.emplace_back(r.parameters[k].name, mme::parameterFlagName(r.flags[k]));
+      ++flagged;
+    }
+  }
+  info.notes = r.notes;
+  if (flagged > 0)
+    std::fprintf(stderr, "identify: warning: %zu parameter(s) ended within 1 %% of a search bound "
+                 "(flag column); the answer may lie beyond: give wider min/max in the model file\n",
+                 flagged);
   mme::writeModelFile(out_path, r.model, &info);
   std::printf("identify: wrote %s\n", out_path.c_str());
   return 0;

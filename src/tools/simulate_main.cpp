@@ -42,8 +42,7 @@ int run(int argc, char** argv) {
     default_frames = scene.default_frames;
   }
   for (const mme::ParamRef& ref : mme::freeParameters(model)) {
-    const mme::Param& p = ref.bond_type >= 0 ? model.bond_types[ref.bond_type].params[ref.param]
-                                             : model.gravity_mps2[ref.param];
+    const mme::Param& p = mme::paramOf(model, ref);
     if (!p.has_value)
       throw mme::InputError(args.get("model") + ": free parameter '" + ref.name +
                             "' has no value to simulate with");
@@ -75,8 +74,7 @@ int run(int argc, char** argv) {
   if (args.has("model-out")) {
     mme::Model blank = model;
     for (const mme::ParamRef& ref : mme::freeParameters(blank)) {
-      mme::Param& p = ref.bond_type >= 0 ? blank.bond_types[ref.bond_type].params[ref.param]
-                                         : blank.gravity_mps2[ref.param];
+      mme::Param& p = mme::paramOf(blank, ref);
       p.has_value = false;
     }
     mme::writeModelFile(args.get("model-out"), blank);

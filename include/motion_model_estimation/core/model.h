@@ -107,6 +107,9 @@ struct ParamRef {
 std::vector<ParamRef> freeParameters(const Model& model);
 /// All parameters that are present (free or fixed), same order rules.
 std::vector<ParamRef> presentParameters(const Model& model);
+/// The parameter block a reference points to (a bond type's parameter or a gravity component).
+Param& paramOf(Model& model, const ParamRef& ref);
+const Param& paramOf(const Model& model, const ParamRef& ref);
 double getParam(const Model& model, const ParamRef& ref);
 void setParam(Model& model, const ParamRef& ref, double value);
 std::vector<double> getValues(const Model& model, const std::vector<ParamRef>& refs);

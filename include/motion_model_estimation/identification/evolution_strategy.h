@@ -87,6 +87,10 @@ class EvolutionStrategy {
   /// Makes the next initial population start at `genes` (one individual exactly there, the
   /// others around it with std spread_fraction x each gene's range): resuming a saved model.
   void setInitialGuess(const std::vector<double>& genes, double spread_fraction);
+  /// Individuals the next initial population holds besides the paper's random draws (e.g. the
+  /// equation-error start, or the best of a previous search): each set of genes (reflected into
+  /// the bounds) replaces one random draw.
+  void setSeeds(std::vector<std::vector<double>> seeds);
   /// Replaces the population (evaluated individuals: cost and local costs set), e.g. to resume
   /// from a saved model; also used by tests to set up operator situations.
   void setPopulation(std::vector<Individual> population);
@@ -147,6 +151,7 @@ class EvolutionStrategy {
   std::vector<uint64_t> operator_counts_;
   std::vector<uint64_t> operator_successes_;
   std::vector<double> initial_guess_;
+  std::vector<std::vector<double>> seeds_;
   double initial_guess_spread_ = 0.0;
   std::unique_ptr<ThreadPool> pool_;  ///< options_.threads - 1 workers (none for 1 thread)
   std::unique_ptr<Refiner> refiner_;  ///< made from options_.refine_algorithm

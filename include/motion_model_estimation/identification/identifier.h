@@ -23,6 +23,12 @@ struct IdentifyOptions {
   /// the best cost falling by a relative 1e-9 (a cost at the round-off floor, 1e-26 m^2 per
   /// residual, counts as no fall). 0 = run the whole generation budget (the paper).
   int patience_generations = 30;
+  /// Seed the population with the equation-error solution (equation_error.h) where it applies,
+  /// widening default bounds that exclude it.
+  bool equation_error_start = true;
+  /// A smooth parameter that ends within 1 % of a default (not user-given) bound: the bound is
+  /// widened tenfold and the search resumed from the answer, at most this many times.
+  int max_bound_widenings = 3;
 };
 
 std::string validateOptions(const IdentifyOptions& options);
@@ -35,6 +41,8 @@ enum class IdentifyStop { kGenerations, kTargetCost, kWallTime, kConverged };
 const char* identifyStopName(IdentifyStop stop);
 
 struct Progress {
+  /// Non-empty: a notice rather than a generation's figures (e.g. a widened bound).
+  std::string message;
   int generation = 0;
   uint64_t evaluations = 0;
   double best_cost = 0.0;
@@ -42,10 +50,20 @@ struct Progress {
   std::vector<double> best_values;  ///< physical, in free-parameter order
 };
 
+/// What the data left undecided about a parameter.
+enum class ParameterFlag {
+  kNone,
+  kAtLowerBound,  ///< within 1 % of its lower search bound (the answer may lie beyond)
+  kAtUpperBound,  ///< within 1 % of its upper search bound
+};
+/// "" | "at_lower_bound" | "at_upper_bound".
+const char* parameterFlagName(ParameterFlag flag);
+
 struct IdentifyResult {
   std::vector<ParamRef> parameters;  ///< free parameters, in order
   std::vector<double> values;        ///< identified physical values
-  std::vector<double> std_devs;      ///< 1-sigma (NaN when the Hessian is not usable)
+  std::vector<double> std_devs;      ///< 1-sigma (NaN where not defined)
+  std::vector<ParameterFlag> flags;  ///< per parameter
   double global_cost = 0.0;
   int generations = 0;
   uint64_t evaluations = 0;
@@ -53,6 +71,8 @@ struct IdentifyResult {
   int frames = 0;
   IdentifyStop stop = IdentifyStop::kGenerations;
   RefineStatus last_refine_status = RefineStatus::kNotRun;  ///< how the last refinement ended
+  int bound_widenings = 0;           ///< searches resumed after widening default bounds
+  std::vector<std::string> notes;    ///< what happened on the way (widened bounds, ...)
   Model model;  ///< the input model with every free value filled in
 };
 
@@ -62,9 +82,10 @@ IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
                              const IdentifyOptions& options,
                              const std::function<void(const Progress&)>& progress = nullptr);
 
-/// 1-sigma uncertainty of each gene-mapped parameter from the global cost's curvature at
-/// `values`: Cov = 2 s^2 H^-1 with s^2 = cost / (3 terms - n). NaN where not defined.
+/// 1-sigma uncertainty of each parameter at `genes` (Gauss-Newton: Cov = s^2 (J^T J)^-1 with J
+/// the residuals' Jacobian, s^2 = cost / (residuals - genes)). NaN where not defined (the
+/// thresholds of conditional bonds, a singular J^T J). `pool` may be null.
 std::vector<double> estimateStdDevs(const Cost& cost, const ParameterSpace& space,
-                                    const std::vector<double>& genes);
+                                    const std::vector<double>& genes, ThreadPool* pool = nullptr);
 
 }  // namespace mme

@@ -72,6 +72,14 @@ void normalEquations(const JacobianColumns& jac, const Eigen::VectorXd& residual
                      Eigen::MatrixXd* jtj, Eigen::VectorXd* g,
                      NormalEquationsPath path = NormalEquationsPath::kAuto);
 
+/// Forward-difference Jacobian of cost.residuals() (in search space) at genes x, whose residuals
+/// are `residual`, over the genes `active` (column j = gene active[j]); one residual evaluation
+/// per column, columns in parallel on `pool` (may be null). False when the stored entries
+/// exceeded max_entries (the columns are then incomplete).
+bool forwardJacobian(const Cost& cost, const ParameterSpace& space, const std::vector<double>& x,
+                     const Eigen::VectorXd& residual, const std::vector<size_t>& active,
+                     uint64_t max_entries, ThreadPool* pool, JacobianColumns* jac);
+
 }  // namespace detail
 
 /// Minimises cost(space.toPhysical(genes)) from `start` (inside the bounds). `pool` may be null

@@ -20,6 +20,10 @@ struct Gene {
   double init_center = 0.0;   ///< centre of the initial distribution (search space)
   double init_spread = 1.0;   ///< std of the initial distribution (search space)
   bool has_initial = false;   ///< the model file gave a value (initial guess)
+  /// The bound came from the model file (a user's constraint: reported when reached, never
+  /// widened); otherwise it is a default that identification may widen.
+  bool user_lower = false;
+  bool user_upper = false;
   /// The cost has a useful slope along it. Not so for the thresholds of conditional bonds
   /// (min_distance, max_distance): the cost is flat between the switching events, so gradient
   /// refinements leave them to the evolution strategy.
@@ -63,6 +67,9 @@ class ParameterSpace {
   /// d(physical value k) / d(gene k) at `genes`, other genes held: turns a gene's standard
   /// deviation into the parameter's.
   double physicalSlope(size_t k, const std::vector<double>& genes) const;
+  /// Replaces gene k's search-space bounds (e.g. a default bound widened after the answer
+  /// reached it). Breakpoints outside them are dropped. Throws InputError when empty.
+  void setBounds(size_t k, double lower, double upper);
   /// Clamps a gene into its bounds by reflection (keeps the search distribution symmetric).
   double reflect(size_t k, double gene_value) const;
   /// Draws gene k from the paper's initialisation (rest lengths around the average observed

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "motion_model_estimation/core/model.h"
@@ -24,6 +25,10 @@ struct IdentificationInfo {
   double wall_time_s = 0.0;
   std::vector<std::string> std_names;  ///< parameter names that have a std
   std::vector<double> std_values;      ///< 1-sigma per name
+  /// Parameters the data left undecided, e.g. {"s01/damping", "at_lower_bound"}: written as the
+  /// map `flags:` of the identification block (empty: no key).
+  std::vector<std::pair<std::string, std::string>> flags;
+  std::vector<std::string> notes;      ///< written as the list `notes:` (empty: no key)
 };
 
 /// YAML text of a model (every parameter block with value/free/min/max as present); with

@@ -24,4 +24,20 @@ struct RandomObjectSpec {
 /// (rest length). Throws InputError on an impossible spec.
 Model makeRandomObject(const RandomObjectSpec& spec);
 
+struct HangingObjectSpec {
+  int particles = 16;          ///< the first two are fixed suspension points
+  int bond_types = 8;          ///< damped linear spring types (stiffness, rest_length, damping free)
+  int bonds = 30;              ///< >= particles - 1
+  double frame_rate_hz = 120.0;
+  double min_stretch = 2.4;    ///< bonds start at min..max_stretch times their rest length
+  double max_stretch = 20.0;
+  uint64_t seed = 1;
+};
+
+/// A soft object hanging under gravity from two fixed points, started away from its equilibrium
+/// (it falls, swings and settles): springs far longer than their rest lengths, damping of
+/// 0.02-0.3 N s/m. Free parameters carry their true values and no bounds (the defaults must do).
+/// Throws InputError on an impossible spec.
+Model makeHangingObject(const HangingObjectSpec& spec);
+
 }  // namespace mme

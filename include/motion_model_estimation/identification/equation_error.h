@@ -1,0 +1,44 @@
+// A start for identification that needs no search: the forces of springs, dampers, flexion,
+// viscosity and gravity are linear in (k, k L, c, k theta0, c_v, g), so Newton's law written on
+// every observed frame, m a = F(x, v), is a linear least-squares problem in them (the equation
+// error). Accelerations come from finite differences of the positions, raw or smoothed by a local
+// quadratic fit (Savitzky-Golay) when the markers are noisy. Exact on noiseless data with one
+// step per frame; a good start elsewhere, wherever the search bounds are.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "motion_model_estimation/core/model.h"
+#include "motion_model_estimation/core/trajectory.h"
+
+namespace mme {
+
+struct EquationErrorOptions {
+  /// 0 (or 1): raw differences of the frame step, a = (x+ - 2x + x-)/h^2 and v = (x - x-)/h (exactly the
+  /// one-step prediction of semi-implicit Euler). w >= 2: a quadratic fitted to the 2w+1 frames
+  /// around each frame gives x, v and a (noise averaged out, motion slightly smoothed).
+  int smoothing_half_width = 0;
+};
+
+struct EquationErrorResult {
+  bool applicable = false;
+  std::string reason;               ///< why not applicable (a free parameter it cannot solve for)
+  /// Physical values in freeParameters(model) order; NaN where the data do not determine one
+  /// (no observed row involves it, or it came out non-physical, e.g. a negative stiffness).
+  std::vector<double> values;
+  size_t rows = 0;                  ///< equations used (3 per particle and frame)
+  /// RMS of the rows' residuals, (m a - F) h^2 / m [m]: with raw differences, the one-step
+  /// prediction error of the solution.
+  double residual_rms_m = 0.0;
+};
+
+/// Solves the equation error for the model's free parameters. Applicable when every free
+/// parameter is a spring's stiffness, rest_length or damping, a flexion's stiffness, rest_angle
+/// or damping, a viscosity or a gravity component, and no free parameter enters non-linearly
+/// (a free rest_length with a non-zero stiffness_nl, free conditions, free Provot clamps and free
+/// interaction parameters are not). `trajectory` has the model's particles as markers.
+EquationErrorResult solveEquationError(const Model& model, const Trajectory& trajectory,
+                                       const EquationErrorOptions& options = {});
+
+}  // namespace mme
