@@ -104,6 +104,20 @@ int atBound(const Gene& g, double gene) {
   return 0;
 }
 
+/// Smooth genes within 1 % of a default (not user-given) bound, with the side (-1 lower, +1
+/// upper): the bounds identification may widen.
+std::vector<std::pair<size_t, int>> widenableAtBound(const ParameterSpace& space,
+                                                     const std::vector<double>& genes) {
+  std::vector<std::pair<size_t, int>> out;
+  for (size_t k = 0; k < space.size(); ++k) {
+    const Gene& g = space.gene(k);
+    if (!g.smooth || g.clamp_length) continue;
+    const int side = atBound(g, genes[k]);
+    if (side != 0 && !(side < 0 ? g.user_lower : g.user_upper)) out.emplace_back(k, side);
+  }
+  return out;
+}
+
 /// Equation-error starts (raw and smoothed differences) as gene vectors; a value outside a
 /// default bound widens it (beyond a user's bound it is clamped), an undetermined one is left
 /// at the initial distribution's centre. Notes what it widened.
@@ -197,12 +211,16 @@ IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
     if (options.max_wall_time_s > 0.0)
       es->setDeadline(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                   std::chrono::duration<double>(options.max_wall_time_s)));
-    double reference_cost = std::numeric_limits<double>::infinity();
-    int last_fall_generation = 0;
+    // Converged: over the last `patience` generations the best cost fell by less than a
+    // relative 1e-6, or it sits at the round-off floor.
+    std::vector<double> best_after;  // per generation of this search
+    int refinements_seen = 0;
+    bool at_default_bound = false;
     stop = IdentifyStop::kGenerations;
     while (generations_done + es->generation() < options.generations) {
       es->step();
       const double best = es->best().cost;
+      best_after.push_back(best);
       if (progress) {
         Progress p;
         p.generation = generations_done + es->generation();
@@ -212,10 +230,6 @@ IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
         p.best_values = es->bestValues();
         progress(p);
       }
-      if (best < reference_cost * (1.0 - 1e-9) && reference_cost > floor_m2) {
-        reference_cost = best;
-        last_fall_generation = es->generation();
-      }
       if (options.target_cost > 0.0 && best <= options.target_cost) {
         stop = IdentifyStop::kTargetCost;
         break;
@@ -224,8 +238,20 @@ IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
         stop = IdentifyStop::kWallTime;
         break;
       }
-      if (options.patience_generations > 0 && es->refinements() > 0 &&
-          es->generation() - last_fall_generation >= options.patience_generations) {
+      if (es->refinements() != refinements_seen) {
+        // A refined best pressing on a default bound: the answer lies beyond it.
+        refinements_seen = es->refinements();
+        if (widenings < options.max_bound_widenings &&
+            !widenableAtBound(space, es->best().genes).empty()) {
+          at_default_bound = true;
+          break;
+        }
+      }
+      const int patience = options.patience_generations;
+      const size_t g = best_after.size();
+      if (patience > 0 && es->refinements() > 0 &&
+          (best <= floor_m2 || (g > static_cast<size_t>(patience) &&
+                                best_after[g - 1 - patience] - best <= 1e-6 * best_after[g - 1 - patience]))) {
         stop = IdentifyStop::kConverged;
         break;
       }
@@ -233,15 +259,15 @@ IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
     generations_done += es->generation();
     evaluations_done += es->evaluations();
     if (stop == IdentifyStop::kTargetCost || stop == IdentifyStop::kWallTime ||
-        widenings >= options.max_bound_widenings)
+        widenings >= options.max_bound_widenings || generations_done >= options.generations)
       break;
+    if (!at_default_bound && widenableAtBound(space, es->best().genes).empty()) break;
     const std::vector<double> best = es->best().genes;
     bool widened = false;
-    for (size_t k = 0; k < space.size(); ++k) {
+    for (const std::pair<size_t, int>& hit : widenableAtBound(space, best)) {
+      const size_t k = hit.first;
+      const int side = hit.second;
       const Gene& g = space.gene(k);
-      if (!g.smooth || g.clamp_length) continue;
-      const int side = atBound(g, best[k]);
-      if (side == 0 || (side < 0 ? g.user_lower : g.user_upper)) continue;
       const double step = g.log_scale ? std::log(kWidenFactor) : (kWidenFactor - 1.0) * (g.upper - g.lower);
       const double lo = side < 0 ? g.lower - step : g.lower, hi = side > 0 ? g.upper + step : g.upper;
       const double value = space.toPhysical(best)[k];

@@ -10,47 +10,14 @@
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/evolution_strategy.h"
 #include "motion_model_estimation/identification/identifier.h"
-#include "motion_model_estimation/identification/levenberg_marquardt.h"
 #include "motion_model_estimation/scenes/scenes.h"
+#include "test_helpers.h"
 
 namespace {
 
-/// A small floating object: 5 particles, 3 linear spring types (6 free parameters), 7 bonds.
-mme::Model smallObject() {
-  mme::Model m;
-  m.frame_rate_hz = 100;
-  const double pos[5][3] = {{0, 0, 0}, {0.2, 0, 0}, {0.1, 0.17, 0}, {0.1, 0.06, 0.16}, {0.3, 0.15, 0.05}};
-  for (int i = 0; i < 5; ++i) {
-    mme::Particle p;
-    p.name = "p" + std::to_string(i);
-    p.mass_kg = 1.0 + 0.25 * i;
-    p.position_m = Eigen::Vector3d(pos[i][0], pos[i][1], pos[i][2]);
-    p.velocity_mps = Eigen::Vector3d(0.05 * ((i * 7) % 3 - 1), 0.04 * ((i * 5) % 3 - 1), 0.03 * (i % 2));
-    m.particles.push_back(p);
-  }
-  const double k[3] = {20.0, 45.0, 80.0}, L[3] = {0.17, 0.22, 0.15};
-  for (int t = 0; t < 3; ++t) {
-    mme::BondType bt;
-    bt.name = "s" + std::to_string(t);
-    bt.param(mme::kStiffness) = {k[t], true, true, true, 1.0, 1000.0, true, true};
-    bt.param(mme::kRestLength) = {L[t], true, true, true, 0.05, 0.5, true, true};
-    m.bond_types.push_back(bt);
-  }
-  const int bonds[7][3] = {{0, 0, 1}, {0, 1, 2}, {1, 0, 2}, {1, 0, 3}, {2, 1, 3}, {2, 2, 3}, {0, 2, 4}};
-  for (const auto& b : bonds) m.bonds.push_back({b[0], {{b[1], b[2], -1}}});
-  return m;
-}
-
-mme::Model withoutValues(mme::Model m) {
-  for (const mme::ParamRef& r : mme::freeParameters(m)) m.bond_types[r.bond_type].params[r.param].has_value = false;
-  return m;
-}
-
-double maxRelativeError(const std::vector<double>& a, const std::vector<double>& truth) {
-  double e = 0;
-  for (size_t k = 0; k < a.size(); ++k) e = std::max(e, std::abs(a[k] - truth[k]) / std::abs(truth[k]));
-  return e;
-}
+using mme::test::maxRelativeError;
+using mme::test::smallObject;
+using mme::test::withoutValues;
 
 struct Fixture {
   mme::Model truth = smallObject();
@@ -229,112 +196,6 @@ TEST(EvolutionStrategy, WarmStartKeepsThePopulationOnANewWindow) {
   double err_before = maxRelativeError(es.space().toPhysical(before), f.true_values);
   double err_after = maxRelativeError(es.bestValues(), f.true_values);
   EXPECT_LT(err_after, std::max(0.5, 10 * err_before));
-}
-
-// The Levenberg-Marquardt refinement on the residuals: from a start 20 % off it converges in a
-// few Jacobians (a derivative-free search needs hundreds of evaluations here), gives the same
-// point bit for bit on two threads (its Jacobian columns run in parallel), keeps to its
-// evaluation limit, and stops at a bound the answer lies beyond.
-TEST(LevenbergMarquardt, ConvergesInAFewJacobiansInsideItsLimitsAndBounds) {
-  Fixture f;
-  const mme::ParameterSpace space(f.search, f.data);
-  const size_t n = space.size();
-  std::vector<double> start = space.toSearch(f.true_values);
-  for (size_t k = 0; k < n; ++k) start[k] += (k % 2 ? 0.2 : -0.2) * std::abs(start[k]);
-  for (size_t k = 0; k < n; ++k) start[k] = space.reflect(k, start[k]);
-  const mme::LmResult one = mme::levenbergMarquardt(*f.cost, space, start, {}, nullptr);
-  EXPECT_LT(maxRelativeError(space.toPhysical(one.genes), f.true_values), 1e-7) << one.cost;
-  EXPECT_LT(one.evaluations, 30 * (n + 1));
-  EXPECT_GE(one.jacobians, 2);
-  // It stops at the round-off floor on the step tolerance, not after stalled Jacobians.
-  EXPECT_EQ(one.status, mme::RefineStatus::kConverged);
-  EXPECT_DOUBLE_EQ(one.cost, f.cost->evaluate(space.toPhysical(one.genes), nullptr));
-
-  mme::ThreadPool pool(2);
-  const mme::LmResult two = mme::levenbergMarquardt(*f.cost, space, start, {}, &pool);
-  EXPECT_EQ(two.genes, one.genes);
-  EXPECT_EQ(two.evaluations, one.evaluations);
-
-  mme::LmSettings few;
-  few.max_evaluations = 2 * (n + 1);
-  EXPECT_LE(mme::levenbergMarquardt(*f.cost, space, start, few, nullptr).evaluations,
-            few.max_evaluations);
-
-  // A Jacobian beyond the memory cap: it stops after computing it, at the start.
-  mme::LmSettings small;
-  small.max_jacobian_entries = 10;
-  const mme::LmResult refused = mme::levenbergMarquardt(*f.cost, space, start, small, nullptr);
-  EXPECT_EQ(refused.status, mme::RefineStatus::kJacobianTooLarge);
-  EXPECT_EQ(refused.genes, start);
-  EXPECT_EQ(refused.evaluations, n + 1);
-  EXPECT_NE(one.status, mme::RefineStatus::kJacobianTooLarge);
-
-  // The first type's stiffness (true 20 N/m) capped at 15: the answer sits on that bound.
-  mme::Model capped = f.search;
-  capped.bond_types[0].param(mme::kStiffness).max = 15.0;
-  const mme::ParameterSpace capped_space(capped, f.data);
-  std::vector<double> inside = start;
-  for (size_t k = 0; k < n; ++k) inside[k] = capped_space.reflect(k, inside[k]);
-  const mme::LmResult at_bound = mme::levenbergMarquardt(*f.cost, capped_space, inside, {}, nullptr);
-  for (size_t k = 0; k < n; ++k) {
-    EXPECT_GE(at_bound.genes[k], capped_space.gene(k).lower);
-    EXPECT_LE(at_bound.genes[k], capped_space.gene(k).upper);
-  }
-  EXPECT_NEAR(capped_space.toPhysical(at_bound.genes)[0], 15.0, 1e-9);
-}
-
-// On noisy data (an ill-conditioned valley: a point 0.7 % above the optimum's cost is 40 % off
-// in a parameter) the refinement stops on the optimum, not before: a second run from its answer
-// lowers the cost by less than 1e-6 of it.
-TEST(LevenbergMarquardt, StopsOnTheNoisyOptimumNotBeforeIt) {
-  Fixture f;
-  mme::addGaussianNoise(&f.data, 1e-4, 7);
-  f.cost = std::make_shared<mme::ShortTermCost>(f.search, f.data);
-  const mme::ParameterSpace space(f.search, f.data);
-  std::vector<double> start = space.toSearch(f.true_values);
-  for (size_t k = 0; k < space.size(); ++k) start[k] = space.reflect(k, start[k] * (k % 2 ? 1.3 : 0.7));
-  const mme::LmResult first = mme::levenbergMarquardt(*f.cost, space, start, {}, nullptr);
-  EXPECT_LT(maxRelativeError(space.toPhysical(first.genes), f.true_values), 0.05);
-  const mme::LmResult again = mme::levenbergMarquardt(*f.cost, space, first.genes, {}, nullptr);
-  EXPECT_GT(again.cost, first.cost * (1.0 - 1e-6));
-  EXPECT_LE(again.cost, first.cost);
-}
-
-// J^T J and J^T r from sparse columns: the dense and the row-outer-product paths agree with a
-// dense product, on a Jacobian with an empty column, empty rows and one dense row.
-TEST(LevenbergMarquardt, NormalEquationsAgreeOnBothPaths) {
-  const size_t m = 40, n = 6;
-  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(m, n);
-  mme::detail::JacobianColumns jac;
-  jac.rows_count = m;
-  jac.rows.resize(n);
-  jac.values.resize(n);
-  for (size_t k = 0; k < n; ++k) {
-    if (k == 3) continue;  // a gene that moved nothing
-    for (size_t i = 0; i < m; ++i) {
-      if (i != 17 && (i * 7 + k * 3) % 5 != 0) continue;  // row 17 dense, ~1/5 of the rest
-      if (i % 11 == 10) continue;                          // rows no gene moves
-      const double v = std::sin(1.0 + static_cast<double>(i * n + k));
-      dense(i, k) = v;
-      jac.rows[k].push_back(static_cast<uint32_t>(i));
-      jac.values[k].push_back(v);
-    }
-  }
-  Eigen::VectorXd r(m);
-  for (size_t i = 0; i < m; ++i) r[i] = std::cos(0.3 * i);
-  const Eigen::MatrixXd want_jtj = dense.transpose() * dense;
-  const Eigen::VectorXd want_g = dense.transpose() * r;
-  EXPECT_EQ(jac.nonZeros(), static_cast<size_t>((dense.array() != 0.0).count()));
-  for (auto path : {mme::detail::NormalEquationsPath::kDense, mme::detail::NormalEquationsPath::kSparse,
-                    mme::detail::NormalEquationsPath::kAuto}) {
-    Eigen::MatrixXd jtj;
-    Eigen::VectorXd g;
-    mme::detail::normalEquations(jac, r, &jtj, &g, path);
-    EXPECT_LT((jtj - want_jtj).cwiseAbs().maxCoeff(), 1e-12) << static_cast<int>(path);
-    EXPECT_LT((g - want_g).cwiseAbs().maxCoeff(), 1e-12) << static_cast<int>(path);
-    EXPECT_EQ(jtj, jtj.transpose());
-    EXPECT_EQ(jtj.row(3).squaredNorm(), 0.0);
-  }
 }
 
 // The engine with the Levenberg-Marquardt refinement from generation 5 identifies the small

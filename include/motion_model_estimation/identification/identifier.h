@@ -19,10 +19,10 @@ struct IdentifyOptions {
   double target_cost = 0.0;      ///< stop once the global cost [m^2] is <= it (0 = never)
   double max_wall_time_s = 0.0;  ///< stop after this wall time (0 = no limit)
   bool estimate_std = true;      ///< finite-difference Hessian at the optimum
-  /// Stop once converged: after a refinement has run, this many generations in a row without
-  /// the best cost falling by a relative 1e-9 (a cost at the round-off floor, 1e-26 m^2 per
-  /// residual, counts as no fall). 0 = run the whole generation budget (the paper).
-  int patience_generations = 30;
+  /// Stop once converged: after a refinement has run, when the best cost fell by less than a
+  /// relative 1e-6 over this many generations, or sits at the round-off floor (1e-26 m^2 per
+  /// residual). 0 = run the whole generation budget (the paper).
+  int patience_generations = 50;
   /// Seed the population with the equation-error solution (equation_error.h) where it applies,
   /// widening default bounds that exclude it.
   bool equation_error_start = true;

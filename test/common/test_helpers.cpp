@@ -1,0 +1,92 @@
+#include "test_helpers.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace mme {
+namespace test {
+
+Param valueParam(double value, bool free) {
+  Param p;
+  p.present = true;
+  p.has_value = true;
+  p.value = value;
+  p.free = free;
+  return p;
+}
+
+int addParticle(Model* model, const Eigen::Vector3d& x, double mass_kg, bool fixed,
+                const std::string& group, const Eigen::Vector3d& v) {
+  Particle p;
+  p.name = "p" + std::to_string(model->particles.size());
+  p.mass_kg = mass_kg;
+  p.position_m = x;
+  p.velocity_mps = v;
+  p.fixed = fixed;
+  p.group = group;
+  model->particles.push_back(p);
+  return static_cast<int>(model->particles.size()) - 1;
+}
+
+int addType(Model* model, const std::string& name, BondKind kind,
+            std::initializer_list<std::pair<ParamId, double>> params, bool free) {
+  BondType t;
+  t.name = name;
+  t.kind = kind;
+  for (const auto& p : params) t.param(p.first) = valueParam(p.second, free);
+  model->bond_types.push_back(t);
+  return static_cast<int>(model->bond_types.size()) - 1;
+}
+
+void addBond(Model* model, int type, int a, int b, int c) {
+  Bond bond;
+  bond.type = type;
+  bond.particles = {{a, b, c}};
+  model->bonds.push_back(bond);
+}
+
+Model smallObject() {
+  Model m;
+  m.frame_rate_hz = 100;
+  const double pos[5][3] = {{0, 0, 0}, {0.2, 0, 0}, {0.1, 0.17, 0}, {0.1, 0.06, 0.16}, {0.3, 0.15, 0.05}};
+  for (int i = 0; i < 5; ++i)
+    addParticle(&m, Eigen::Vector3d(pos[i][0], pos[i][1], pos[i][2]), 1.0 + 0.25 * i, false, "",
+                Eigen::Vector3d(0.05 * ((i * 7) % 3 - 1), 0.04 * ((i * 5) % 3 - 1), 0.03 * (i % 2)));
+  const double k[3] = {20.0, 45.0, 80.0}, L[3] = {0.17, 0.22, 0.15};
+  for (int t = 0; t < 3; ++t) {
+    BondType bt;
+    bt.name = "s" + std::to_string(t);
+    bt.param(kStiffness) = {k[t], true, true, true, 1.0, 1000.0, true, true};
+    bt.param(kRestLength) = {L[t], true, true, true, 0.05, 0.5, true, true};
+    m.bond_types.push_back(bt);
+  }
+  const int bonds[7][3] = {{0, 0, 1}, {0, 1, 2}, {1, 0, 2}, {1, 0, 3}, {2, 1, 3}, {2, 2, 3}, {0, 2, 4}};
+  for (const auto& b : bonds) addBond(&m, b[0], b[1], b[2]);
+  return m;
+}
+
+Model withoutValues(Model model) {
+  for (const ParamRef& r : freeParameters(model)) paramOf(model, r).has_value = false;
+  return model;
+}
+
+Model withoutBounds(Model model) {
+  for (const ParamRef& r : freeParameters(model)) {
+    Param& p = paramOf(model, r);
+    p.has_min = p.has_max = false;
+    p.min = -std::numeric_limits<double>::infinity();
+    p.max = std::numeric_limits<double>::infinity();
+  }
+  return model;
+}
+
+double maxRelativeError(const std::vector<double>& a, const std::vector<double>& truth) {
+  double e = 0;
+  for (size_t k = 0; k < a.size() && k < truth.size(); ++k)
+    e = std::max(e, std::abs(a[k] - truth[k]) / std::abs(truth[k]));
+  return e;
+}
+
+}  // namespace test
+}  // namespace mme

@@ -1,0 +1,96 @@
+// The offline pipeline as a user gets it: the default engine identifies what the paper's
+// settings did not (a soft hanging object without bounds), stops once converged, widens a default
+// bound it ended on, reports a user's bound instead of crossing it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/scenes/random_object.h"
+#include "test_helpers.h"
+
+namespace {
+
+using mme::test::maxRelativeError;
+
+struct Hanging {
+  mme::Model truth = mme::makeHangingObject({});
+  mme::Model blank = mme::test::withoutBounds(mme::test::withoutValues(truth));
+  mme::Trajectory data = mme::simulateTrajectory(truth, 240, truth.frame_rate_hz);
+  std::vector<double> true_values = mme::getValues(truth, mme::freeParameters(truth));
+};
+
+TEST(Identifier, DefaultEngineIdentifiesAHangingObjectWithoutBoundsAndStopsOnceConverged) {
+  Hanging h;
+  mme::IdentifyOptions options = mme::identifyOptionsFor(mme::Preset::kDefault);
+  options.estimate_std = false;
+  const mme::IdentifyResult r = mme::identifyModel(h.blank, h.data, options);
+  EXPECT_LT(maxRelativeError(r.values, h.true_values), 1e-3) << r.global_cost;
+  EXPECT_EQ(r.stop, mme::IdentifyStop::kConverged);
+  EXPECT_LT(r.generations, 100);
+  for (mme::ParameterFlag flag : r.flags) EXPECT_EQ(flag, mme::ParameterFlag::kNone);
+}
+
+// Without the equation-error start the rest lengths (2.4-20x shorter than observed) lie below
+// the default bounds [observed/3, 3 observed]: the refined best presses on them, they are
+// widened and the search resumes from it.
+TEST(Identifier, WidensADefaultBoundTheAnswerEndedOnAndSaysSo) {
+  Hanging h;
+  mme::IdentifyOptions options = mme::identifyOptionsFor(mme::Preset::kDefault);
+  options.estimate_std = false;
+  options.equation_error_start = false;
+  options.generations = 400;
+  std::vector<std::string> messages;
+  const mme::IdentifyResult r = mme::identifyModel(
+      h.blank, h.data, options, [&](const mme::Progress& p) { if (!p.message.empty()) messages.push_back(p.message); });
+  EXPECT_GE(r.bound_widenings, 1);
+  ASSERT_FALSE(messages.empty());
+  EXPECT_NE(messages[0].find("rest_length' ended at its default lower search bound"), std::string::npos)
+      << messages[0];
+  EXPECT_EQ(r.notes.size(), messages.size());
+  // Each widening is tenfold (here twice for some types): every rest length ends inside and
+  // every parameter is found.
+  EXPECT_LT(maxRelativeError(r.values, h.true_values), 1e-3);
+  for (mme::ParameterFlag flag : r.flags) EXPECT_EQ(flag, mme::ParameterFlag::kNone);
+}
+
+// A bound from the model file is the user's: reached, it is flagged, never crossed.
+TEST(Identifier, FlagsAUserBoundInsteadOfCrossingIt) {
+  mme::Model truth = mme::test::smallObject();
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 60, 100.0);
+  mme::Model search = mme::test::withoutValues(truth);
+  search.bond_types[1].param(mme::kStiffness).max = 30.0;  // true 45 N/m
+  mme::IdentifyOptions options = mme::identifyOptionsFor(mme::Preset::kDefault);
+  options.estimate_std = false;
+  const mme::IdentifyResult r = mme::identifyModel(search, data, options);
+  EXPECT_EQ(r.bound_widenings, 0);
+  ASSERT_EQ(r.parameters[2].name, "s1/stiffness");
+  EXPECT_NEAR(r.values[2], 30.0, 0.3);
+  EXPECT_EQ(r.flags[2], mme::ParameterFlag::kAtUpperBound);
+  EXPECT_STREQ(mme::parameterFlagName(r.flags[2]), "at_upper_bound");
+}
+
+// The paper's preset runs its whole generation budget (no convergence stop) with BOBYQA from 400.
+TEST(Identifier, PaperPresetKeepsThePapersSchedule) {
+  const mme::IdentifyOptions paper = mme::identifyOptionsFor(mme::Preset::kPaper);
+  EXPECT_EQ(paper.patience_generations, 0);
+  EXPECT_EQ(paper.es.refine_algorithm, mme::RefineAlgorithm::kBobyqa);
+  EXPECT_EQ(paper.es.refine_start_generation, 400);
+  EXPECT_EQ(paper.es.refine_period, 100);
+  const mme::IdentifyOptions best = mme::identifyOptionsFor(mme::Preset::kDefault);
+  EXPECT_EQ(best.es.refine_algorithm, mme::RefineAlgorithm::kLevenbergMarquardt);
+  mme::Preset preset = mme::Preset::kDefault;
+  EXPECT_TRUE(mme::parsePreset("paper", &preset));
+  EXPECT_EQ(preset, mme::Preset::kPaper);
+  EXPECT_FALSE(mme::parsePreset("Paper", &preset));
+
+  mme::Model truth = mme::test::smallObject();
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 40, 100.0);
+  mme::IdentifyOptions short_paper = paper;
+  short_paper.generations = 30;
+  short_paper.estimate_std = false;
+  EXPECT_EQ(mme::identifyModel(mme::test::withoutValues(truth), data, short_paper).generations, 30);
+}
+
+}  // namespace
