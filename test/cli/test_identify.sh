@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# identify: recovers paper_object's 20 parameters from a trajectory file and a model without
-# values (Levenberg-Marquardt refinement from generation 5), writes the same model for any
-# thread count, and refuses bad refinement options and missing files with exit 2.
+# identify: with its defaults (no option) recovers paper_object's 20 parameters from a trajectory
+# file and a model without values and stops once converged; writes the same model for any thread
+# count; --preset paper runs the paper's schedule; a parameter on a user's bound is flagged in the
+# table, on stderr and in the export; bad options and missing files give exit 2.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/../.." && pwd)
 source "$here/scripts/env.sh"
@@ -12,11 +13,12 @@ tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 # The model as identification sees it: free parameters without values.
 sed -E 's/\{value: [^,]*, free: true/{free: true/' "$tmp/truth.yaml" >"$tmp/free.yaml"
 ! grep -q "value:" "$tmp/free.yaml"
-fast=(--refine levenberg_marquardt --refine-start 5 --refine-period 5 --generations 10)
 "$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/one.yaml" \
-  "${fast[@]}" --quiet >/dev/null
+  >"$tmp/one.log"
+grep -q "preset default (refinement levenberg_marquardt from generation 5, every 5)" "$tmp/one.log"
+grep -q "^stopped: converged" "$tmp/one.log"
 "$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/two.yaml" \
-  "${fast[@]}" --threads 2 --quiet >/dev/null
+  --threads 2 --quiet >/dev/null
 # Same seed and input: the same model for 1 and 2 threads (only the recorded wall time differs).
 cmp <(grep -v wall_time_s "$tmp/one.yaml") <(grep -v wall_time_s "$tmp/two.yaml")
 grep -q wall_time_s "$tmp/one.yaml"
@@ -27,6 +29,22 @@ paste <(values "$tmp/truth.yaml") <(values "$tmp/one.yaml") | awk '
   END { printf "identify: max relative error %.3g over %d parameters\n", worst, n;
         exit !(n == 20 && worst < 1e-6) }'
 
+# The paper's preset: its schedule, and the whole generation budget.
+"$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/paper.yaml" \
+  --preset paper --generations 3 >"$tmp/paper.log"
+grep -q "preset paper (refinement bobyqa from generation 400, every 100)" "$tmp/paper.log"
+grep -q "3 generations" "$tmp/paper.log"
+
+# A user's bound below the truth (10.4 N/m): flagged, never crossed.
+sed -E '0,/stiffness: \{free: true, min: 1.04, max: 104\}/s//stiffness: {free: true, min: 1.04, max: 8}/' \
+  "$tmp/free.yaml" >"$tmp/bounded.yaml"
+grep -q "max: 8}" "$tmp/bounded.yaml"
+"$bin/identify" --model "$tmp/bounded.yaml" --trajectory "$tmp/data.trc" --out "$tmp/bounded_out.yaml" \
+  --quiet >"$tmp/bounded.log" 2>"$tmp/bounded.err"
+grep -E -q "^s00/stiffness +8(\.0*)? .*at_upper_bound$" "$tmp/bounded.log"
+grep -q "ended within 1 % of a search bound" "$tmp/bounded.err"
+grep -q "s00/stiffness: at_upper_bound" "$tmp/bounded_out.yaml"
+
 expect_exit2() {  # expect_exit2 PATTERN ARGS... : exit code 2 and PATTERN in a one-line stderr
   local pattern=$1; shift
   set +e; "$bin/identify" "$@" 2>"$tmp/err" >/dev/null; local rc=$?; set -e
@@ -35,7 +53,8 @@ expect_exit2() {  # expect_exit2 PATTERN ARGS... : exit code 2 and PATTERN in a 
   [ "$(wc -l <"$tmp/err")" -eq 1 ] || { echo "error is not one line: $(cat "$tmp/err")"; exit 1; }
 }
 ok=(--model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/x.yaml")
-expect_exit2 "refine_algorithm must be" "${ok[@]}" --refine lm
+expect_exit2 "--refine 'lm' is unknown" "${ok[@]}" --refine lm
+expect_exit2 "--preset 'fast' is unknown (available: default or paper)" "${ok[@]}" --preset fast
 expect_exit2 "--refine-start" "${ok[@]}" --refine-start -1
 expect_exit2 "--refine-period" "${ok[@]}" --refine-period many
 expect_exit2 "nope.trc" --model "$tmp/free.yaml" --trajectory "$tmp/nope.trc" --out "$tmp/x.yaml"
