@@ -74,7 +74,6 @@ EvolutionStrategy::EvolutionStrategy(ParameterSpace space, const EsOptions& opti
       refiner_(Refiner::Create(options.refine_algorithm)) {
   const std::string bad = validateOptions(options_);
   if (!bad.empty()) throw InputError("evolution strategy: " + bad);
-  for (const Gene& g : space_.genes()) has_thresholds_ = has_thresholds_ || !g.breakpoints.empty();
   if (space_.size() == 0) throw InputError("the model has no free parameter to identify");
   operator_counts_.assign(7, 0);
   operator_successes_.assign(7, 0);
@@ -375,57 +374,31 @@ uint64_t EvolutionStrategy::refineEvaluationLimit() const {
   return max_evaluations;
 }
 
-void EvolutionStrategy::refineBest() {
-  // A local search from the best individual, inside the bounds; its result joins the
-  // population only when it improves the best.
-  const size_t n = space_.size();
-  const Individual& start = best();
+RefineSettings EvolutionStrategy::refineSettings() const {
   RefineSettings settings;
   settings.max_evaluations = refineEvaluationLimit();
   settings.window_evaluations = refineWindow();
   settings.stall_factor = options_.refine_stall_factor;
   settings.deadline = deadline_;
   if (options_.refine_smooth_genes_only) {
-    settings.movable.assign(n, 0);
-    for (size_t k = 0; k < n; ++k) settings.movable[k] = space_.gene(k).smooth;
+    settings.movable.assign(space_.size(), 0);
+    for (size_t k = 0; k < space_.size(); ++k) settings.movable[k] = space_.gene(k).smooth;
   }
+  return settings;
+}
+
+void EvolutionStrategy::refineBest() {
+  // A local search from the best individual, inside the bounds; its result joins the
+  // population only when it improves the best.
+  const size_t n = space_.size();
+  const Individual& start = best();
+  const RefineSettings settings = refineSettings();
   RefineStart from;
   from.genes = start.genes;
   from.cost = start.cost;
   from.steps = start.mutability;
-  RefineResult result = refiner_->refine(*cost_, space_, from, settings, threadPool());
-  if (options_.refine_smooth_genes_only && has_thresholds_) {
-    // The thresholds the gradient refinement left alone: a discrete search over their flat
-    // intervals, then the smooth genes again for the new thresholds, while it pays.
-    uint64_t spent = result.evaluations;
-    const RefineStatus smooth_status = result.status;
-    for (int round = 0; round < kThresholdRounds; ++round) {
-      RefineSettings rest = settings;
-      rest.movable.clear();
-      rest.max_evaluations = settings.max_evaluations > spent ? settings.max_evaluations - spent : 0;
-      if (rest.max_evaluations == 0) break;
-      RefineStart at{result.genes, result.cost, start.mutability};
-      const RefineResult moved = searchThresholds(*cost_, space_, at, rest);
-      spent += moved.evaluations;
-      if (!(moved.cost < result.cost)) {
-        if (moved.cost <= result.cost) result.genes = moved.genes;  // centred in its interval
-        break;
-      }
-      result.genes = moved.genes;
-      result.cost = moved.cost;
-      rest.movable = settings.movable;
-      rest.max_evaluations = settings.max_evaluations > spent ? settings.max_evaluations - spent : 0;
-      at = {result.genes, result.cost, start.mutability};
-      const RefineResult again = refiner_->refine(*cost_, space_, at, rest, threadPool());
-      spent += again.evaluations;
-      if (again.cost < result.cost) {
-        result.genes = again.genes;
-        result.cost = again.cost;
-      }
-    }
-    result.evaluations = spent;
-    result.status = smooth_status;
-  }
+  const RefineResult result =
+      refineAlternating(*refiner_, *cost_, space_, from, settings, threadPool(), kThresholdRounds);
   last_refine_status_ = result.status;
   evaluations_ += result.evaluations;
   if (result.evaluations == 0) return;
@@ -446,6 +419,23 @@ void EvolutionStrategy::refineBest() {
     *worst = std::move(one[0]);
     best_index_ = static_cast<int>(worst - population_.begin());
   }
+}
+
+bool EvolutionStrategy::offer(const std::vector<double>& genes) {
+  if (population_.empty() || genes.size() != space_.size()) return false;
+  Individual candidate = best();
+  for (size_t k = 0; k < space_.size(); ++k) candidate.genes[k] = space_.reflect(k, genes[k]);
+  std::vector<Individual> one{candidate};
+  evaluate(&one);
+  ++operator_counts_[static_cast<int>(Operator::kRefine)];
+  auto worst = std::max_element(population_.begin(), population_.end(),
+                                [](const Individual& a, const Individual& b) { return a.cost < b.cost; });
+  if (!(one[0].cost < worst->cost)) return false;
+  ++operator_successes_[static_cast<int>(Operator::kRefine)];
+  const bool new_best = one[0].cost < best().cost;
+  *worst = std::move(one[0]);
+  if (new_best) best_index_ = static_cast<int>(worst - population_.begin());
+  return new_best;
 }
 
 void EvolutionStrategy::step() {

@@ -189,6 +189,10 @@ LmResult levenbergMarquardt(const Cost& cost, const ParameterSpace& space,
       out.status = RefineStatus::kEvaluationLimit;
       break;
     }
+    if (settings.cancel && settings.cancel->load(std::memory_order_relaxed)) {
+      out.status = RefineStatus::kCancelled;
+      break;
+    }
     if (settings.deadline != std::chrono::steady_clock::time_point::max() && !jacobian_fits()) {
       out.status = RefineStatus::kDeadline;
       break;
@@ -222,6 +226,10 @@ LmResult levenbergMarquardt(const Cost& cost, const ParameterSpace& space,
       }
       if (now() > settings.deadline) {
         out.status = RefineStatus::kDeadline;
+        break;
+      }
+      if (settings.cancel && settings.cancel->load(std::memory_order_relaxed)) {
+        out.status = RefineStatus::kCancelled;
         break;
       }
       const Eigen::VectorXd dx = dampedStep(jtj, mu * scale, g);

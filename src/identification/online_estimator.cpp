@@ -1,12 +1,15 @@
 #include "motion_model_estimation/identification/online_estimator.h"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <limits>
 
 #include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/identification/threshold_search.h"
 
 namespace mme {
 
@@ -16,6 +19,9 @@ std::string validateOptions(const OnlineEstimatorOptions& o) {
     return "min_frames must be in [3, window_frames]";
   if (o.generations_per_update < 1) return "generations_per_update must be >= 1";
   if (!(o.stability_rollout_factor >= 1.0)) return "stability_rollout_factor must be >= 1";
+  if (!(o.update_budget_s > 0.0) || !std::isfinite(o.update_budget_s))
+    return "update_budget_s must be > 0";
+  if (!(o.refine_max_s > 0.0) || !std::isfinite(o.refine_max_s)) return "refine_max_s must be > 0";
   return validateOptions(o.es);
 }
 
@@ -30,6 +36,64 @@ void checkModel(const Model& model) {
   if (freeParameters(model).empty()) throw InputError("model: no free parameter to identify");
 }
 }  // namespace
+
+struct OnlineEstimator::BackgroundRefinement {
+  std::atomic<bool> cancel{false};
+  std::atomic<bool> done{false};
+  RefineResult result;  // written by the thread before `done`
+  std::thread thread;
+  ~BackgroundRefinement() {
+    cancel = true;
+    if (thread.joinable()) thread.join();
+  }
+};
+
+OnlineEstimator::~OnlineEstimator() {
+  std::lock_guard<std::mutex> lock(update_mutex_);
+  stopRefinement();
+}
+
+void OnlineEstimator::stopRefinement() { refinement_.reset(); }  // cancels and joins
+
+void OnlineEstimator::waitForRefinement() {
+  std::lock_guard<std::mutex> lock(update_mutex_);
+  if (refinement_ && refinement_->thread.joinable()) refinement_->thread.join();
+}
+
+void OnlineEstimator::startRefinement(std::shared_ptr<const Cost> cost) {
+  auto job = std::make_unique<BackgroundRefinement>();
+  RefineSettings settings = es_->refineSettings();
+  settings.deadline = std::chrono::steady_clock::now() +
+                      std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                          std::chrono::duration<double>(options_.refine_max_s));
+  settings.cancel = &job->cancel;
+  const Individual& best = es_->best();
+  RefineStart start{best.genes, best.cost, best.mutability};
+  BackgroundRefinement* out = job.get();
+  const RefineAlgorithm algorithm = options_.es.refine_algorithm;
+  // The thread owns copies of what it reads (the space, the start) and shares the window's cost.
+  job->thread = std::thread([out, cost, space = es_->space(), start, settings, algorithm]() {
+    const std::unique_ptr<Refiner> refiner = Refiner::Create(algorithm);
+    try {
+      out->result = refineAlternating(*refiner, *cost, space, start, settings, nullptr);
+    } catch (const std::exception&) {
+      out->result = RefineResult{start.genes, start.cost, 0, RefineStatus::kNoProgress};
+    }
+    out->done = true;
+  });
+  refinement_ = std::move(job);
+  last_refine_generation_ = es_->generation();
+}
+
+void OnlineEstimator::handOverRefinement() {
+  if (!refinement_ || !refinement_->done) return;
+  if (refinement_->thread.joinable()) refinement_->thread.join();
+  const RefineResult result = refinement_->result;
+  refinement_.reset();
+  if (result.evaluations > 0) es_->offer(result.genes);
+  ++refinements_done_;
+  last_refine_status_ = refineStatusName(result.status);
+}
 
 OnlineEstimator::OnlineEstimator(const Model& model, const OnlineEstimatorOptions& options)
     : model_(model), options_(options) {
@@ -161,14 +225,22 @@ bool OnlineEstimator::update() {
     model = model_;
     version = model_version_;
   }
-  if (version != es_version_) es_.reset();  // reset() or replaceModel() since the last update
+  const auto began = std::chrono::steady_clock::now();
+  if (version != es_version_) {  // reset() or replaceModel() since the last update
+    stopRefinement();
+    es_.reset();
+    last_refine_generation_ = -1;
+  }
   es_version_ = version;
   // Live streams carry their own clock: the model's rate wins only when it states one.
   if (!(model.frame_rate_hz > 0.0)) model.frame_rate_hz = window_data.frame_rate_hz;
   auto cost = std::make_shared<ShortTermCost>(model, window_data);
   if (cost->termCount() == 0) return false;
   if (!es_) {
-    es_ = std::make_unique<EvolutionStrategy>(ParameterSpace(model, window_data), options_.es);
+    // The refinement runs beside the generations (startRefinement), not inside them.
+    EsOptions es_options = options_.es;
+    es_options.refine_period = 0;
+    es_ = std::make_unique<EvolutionStrategy>(ParameterSpace(model, window_data), es_options);
     if (options_.resume_from_model_values) {
       std::vector<double> values;
       for (size_t k = 0; k < es_->space().size(); ++k) {
@@ -185,7 +257,22 @@ bool OnlineEstimator::update() {
     }
   }
   es_->setCost(cost);  // re-evaluates the living population on the new window
-  for (int g = 0; g < options_.generations_per_update; ++g) es_->step();
+  handOverRefinement();
+  // The generations that fit in the budget (at least one), at the pace of the ones done.
+  const auto deadline = began + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                    std::chrono::duration<double>(options_.update_budget_s));
+  for (int g = 0; g < options_.generations_per_update; ++g) {
+    const auto before = std::chrono::steady_clock::now();
+    es_->step();
+    const auto after = std::chrono::steady_clock::now();
+    if (after + (after - before) > deadline) break;
+  }
+  const EsOptions& es_options = options_.es;
+  if (!refinement_ && es_options.refine_period > 0 &&
+      es_->generation() >= es_options.refine_start_generation &&
+      (last_refine_generation_ < 0 ||
+       es_->generation() - last_refine_generation_ >= es_options.refine_period))
+    startRefinement(cost);
 
   Estimate e;
   e.valid = true;
@@ -198,6 +285,8 @@ bool OnlineEstimator::update() {
   for (const Gene& g : es_->space().genes()) e.parameter_names.push_back(g.ref.name);
   e.values = es_->bestValues();
   e.local_costs = es_->best().local_costs;
+  e.refinements = refinements_done_;
+  e.last_refine_status = last_refine_status_;
   // 1-sigma from the spread of the elite (best fifth) of the population: cheap enough to do
   // at every update, unlike the Hessian used offline.
   std::vector<const Individual*> sorted;

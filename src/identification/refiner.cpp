@@ -38,7 +38,7 @@ struct NloptContext {
   nlopt::opt* opt;
   const std::vector<size_t>* active;  ///< reduced coordinate j -> gene active[j]
   std::vector<double> genes;          ///< the full point (inactive genes at their start)
-  std::chrono::steady_clock::time_point deadline;
+  const RefineSettings* settings;
   uint64_t window;       ///< evaluations over which progress is judged
   double stall_factor;   ///< the best cost must shrink this much per window (0: no test)
   double start_cost;     ///< the cost before the first window
@@ -57,8 +57,9 @@ double nloptObjective(const std::vector<double>& reduced, std::vector<double>& /
   if (!std::isfinite(c)) c = 1e300;
   ctx->best = std::min(ctx->best, c);
   ctx->best_after.push_back(ctx->best);
-  if (std::chrono::steady_clock::now() > ctx->deadline) {
-    ctx->forced = RefineStatus::kDeadline;
+  if (ctx->settings->mustStop()) {
+    const bool cancelled = ctx->settings->cancel && ctx->settings->cancel->load();
+    ctx->forced = cancelled ? RefineStatus::kCancelled : RefineStatus::kDeadline;
     ctx->opt->force_stop();
   }
   // Stalled: the last window did not divide the best cost by the factor (converged, at the
@@ -111,7 +112,7 @@ class NloptRefiner final : public Refiner {
     opt.set_upper_bounds(hi);
     opt.set_initial_step(step);
     const uint64_t window = std::max<uint64_t>(settings.window_evaluations, 1);
-    NloptContext ctx{&cost, &space, &opt, &active, start.genes, settings.deadline, window,
+    NloptContext ctx{&cost, &space, &opt, &active, start.genes, &settings, window,
                      settings.stall_factor, start.cost, 0, start.cost, {}, RefineStatus::kNotRun};
     ctx.best_after.reserve(std::min<uint64_t>(window, 1u << 20));
     opt.set_min_objective(nloptObjective, &ctx);
@@ -180,6 +181,7 @@ class LmRefiner final : public Refiner {
     lm.max_evaluations = settings.max_evaluations;
     lm.stall_factor = settings.stall_factor;
     lm.deadline = settings.deadline;
+    lm.cancel = settings.cancel;
     lm.movable = settings.movable;
     LmResult result = levenbergMarquardt(cost, space, start.genes, lm, pool);
     out.evaluations = result.evaluations;
@@ -237,6 +239,7 @@ const char* refineStatusName(RefineStatus status) {
     case RefineStatus::kDeadline: return "deadline";
     case RefineStatus::kJacobianTooLarge: return "jacobian_too_large";
     case RefineStatus::kNotRun: return "not_run";
+    case RefineStatus::kCancelled: return "cancelled";
   }
   return "?";
 }

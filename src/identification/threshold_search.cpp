@@ -16,7 +16,7 @@ RefineResult searchThresholds(const Cost& cost, const ParameterSpace& space,
   bool moved_down = false;
   const auto out_of_budget = [&]() {
     return (settings.max_evaluations > 0 && out.evaluations >= settings.max_evaluations) ||
-           std::chrono::steady_clock::now() > settings.deadline;
+           settings.mustStop();
   };
   for (size_t k = 0; k < space.size(); ++k) {
     const Gene& g = space.gene(k);
@@ -83,13 +83,61 @@ RefineResult searchThresholds(const Cost& cost, const ParameterSpace& space,
       out.cost = best_cost;
     }
     if (out_of_budget()) {
-      out.status = std::chrono::steady_clock::now() > settings.deadline
-                       ? RefineStatus::kDeadline : RefineStatus::kEvaluationLimit;
+      out.status = settings.cancel && settings.cancel->load() ? RefineStatus::kCancelled
+                   : settings.mustStop()                      ? RefineStatus::kDeadline
+                                                              : RefineStatus::kEvaluationLimit;
       return out;
     }
   }
   if (moved_down) out.status = RefineStatus::kStalled;
   return out;
+}
+
+bool hasThresholds(const ParameterSpace& space) {
+  for (const Gene& g : space.genes())
+    if (!g.smooth && !g.breakpoints.empty()) return true;
+  return false;
+}
+
+RefineResult refineAlternating(const Refiner& refiner, const Cost& cost, const ParameterSpace& space,
+                               const RefineStart& start, const RefineSettings& settings,
+                               ThreadPool* pool, int rounds) {
+  RefineResult result = refiner.refine(cost, space, start, settings, pool);
+  if (settings.movable.empty() || !hasThresholds(space)) return result;
+  // The thresholds the gradient refinement left alone: a discrete search over their flat
+  // intervals, then the smooth genes again for the new thresholds, while it pays.
+  uint64_t spent = result.evaluations;
+  const RefineStatus smooth_status = result.status;
+  const auto left = [&]() {
+    return settings.max_evaluations > spent ? settings.max_evaluations - spent : 0;
+  };
+  for (int round = 0; round < rounds && left() > 0 && !settings.mustStop(); ++round) {
+    RefineSettings rest = settings;
+    rest.movable.clear();
+    rest.max_evaluations = left();
+    const RefineResult moved =
+        searchThresholds(cost, space, {result.genes, result.cost, start.steps}, rest);
+    spent += moved.evaluations;
+    if (!(moved.cost < result.cost)) {
+      if (moved.cost <= result.cost) result.genes = moved.genes;  // centred in its interval
+      break;
+    }
+    result.genes = moved.genes;
+    result.cost = moved.cost;
+    rest.movable = settings.movable;
+    rest.max_evaluations = left();
+    if (rest.max_evaluations == 0) break;
+    const RefineResult again =
+        refiner.refine(cost, space, {result.genes, result.cost, start.steps}, rest, pool);
+    spent += again.evaluations;
+    if (again.cost < result.cost) {
+      result.genes = again.genes;
+      result.cost = again.cost;
+    }
+  }
+  result.evaluations = spent;
+  result.status = smooth_status;
+  return result;
 }
 
 }  // namespace mme

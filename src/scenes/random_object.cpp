@@ -86,6 +86,10 @@ Model makeRandomObject(const RandomObjectSpec& spec) {
     ks = Param{k, true, true, true, k / 10.0, k * 10.0, true, true};
     Param& ls = type.param(kRestLength);
     ls = Param{length, true, true, true, length / 2.0, length * 2.0, true, true};
+    if (spec.damping_max_nspm > 0.0) {
+      const double c = spec.damping_max_nspm * std::exp(std::log(0.1) * random.uniform());
+      type.param(kDamping) = Param{c, true, true, true, c / 10.0, c * 10.0, true, true};
+    }
     model.bond_types.push_back(type);
   }
   return model;

@@ -94,6 +94,10 @@ class EvolutionStrategy {
   /// Replaces the population (evaluated individuals: cost and local costs set), e.g. to resume
   /// from a saved model; also used by tests to set up operator situations.
   void setPopulation(std::vector<Individual> population);
+  /// An individual found elsewhere (e.g. a refinement run beside the generations on an earlier
+  /// window): evaluated on the current cost, it replaces the worst individual when better than
+  /// it. Returns true when it became the best.
+  bool offer(const std::vector<double>& genes);
   /// A refinement running past this time stops there (keeping its best point); default: none.
   void setDeadline(std::chrono::steady_clock::time_point deadline) { deadline_ = deadline; }
 
@@ -108,6 +112,9 @@ class EvolutionStrategy {
   const std::vector<uint64_t>& operatorCounts() const { return operator_counts_; }
   /// Children of each operator that entered the population (survived selection).
   const std::vector<uint64_t>& operatorSuccesses() const { return operator_successes_; }
+  /// The settings of a refinement of the best individual now (evaluation budget with the caps
+  /// applied, stall window, deadline, the genes it may move).
+  RefineSettings refineSettings() const;
   /// How the last refinement ended (kNotRun before the first) and how many have run.
   RefineStatus lastRefineStatus() const { return last_refine_status_; }
   int refinements() const { return refinements_; }
@@ -157,7 +164,6 @@ class EvolutionStrategy {
   std::unique_ptr<Refiner> refiner_;  ///< made from options_.refine_algorithm
   RefineStatus last_refine_status_ = RefineStatus::kNotRun;
   int refinements_ = 0;
-  bool has_thresholds_ = false;  ///< some gene has breakpoints (searchThresholds applies)
   /// Threshold search / smooth refinement alternations per refinement at most.
   static constexpr int kThresholdRounds = 3;
   /// Refinements stop here (setDeadline); default: never.

@@ -29,6 +29,7 @@ struct LmSettings {
   /// (with the same Jacobian) moves no gene by more than this share of its range; 0: off.
   double step_tolerance = 1e-10;
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
+  const std::atomic<bool>* cancel = nullptr;  ///< raised: stop before the next Jacobian or step
   /// Most non-zero Jacobian entries kept (12 bytes each: 10^8 = 1.2 GB); beyond it the
   /// refinement stops rather than exhaust memory (LmResult::jacobian_too_large).
   uint64_t max_jacobian_entries = 100000000;
@@ -43,7 +44,7 @@ struct LmResult {
   uint64_t evaluations = 0;   ///< residual evaluations (each = one full-cost evaluation)
   int jacobians = 0;
   /// kConverged (step tolerance), kStalled (stall rule), kNoProgress (no damping lowers the
-  /// cost), kEvaluationLimit, kDeadline (passed, or the next Jacobian would pass it),
+  /// cost), kEvaluationLimit, kDeadline (passed, or the next Jacobian would pass it), kCancelled,
   /// kJacobianTooLarge (the non-zero entries exceeded max_jacobian_entries: stopped there with
   /// the best point so far; the caller may fall back to a derivative-free search).
   RefineStatus status = RefineStatus::kNotRun;

@@ -9,6 +9,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <Eigen/Core>
@@ -19,19 +20,21 @@
 
 namespace mme {
 
-/// The preset's engine options, except that a refinement is one window of evaluations (30 x
-/// genes + 100; LM: 3 Jacobians): an update must stay short, the data move on while it runs, and
-/// the next refinement starts from the newer window anyway.
-inline EsOptions onlineEsOptions(Preset preset = Preset::kDefault) {
-  EsOptions o = esOptionsFor(preset);
-  o.refine_stall_factor = 0.0;
-  return o;
-}
+/// The preset's engine options. Online, the refinement does not run inside a generation: the
+/// estimator runs it beside the generations on its own thread (see OnlineEstimator), on the
+/// preset's schedule.
+inline EsOptions onlineEsOptions(Preset preset = Preset::kDefault) { return esOptionsFor(preset); }
 
 struct OnlineEstimatorOptions {
   int window_frames = 100;          ///< frames in the sliding window
   int min_frames = 10;              ///< frames needed before the first update
-  int generations_per_update = 5;   ///< generations run by one update()
+  int generations_per_update = 5;   ///< generations run by one update() at most
+  /// [s] one update() returns within about this: it runs the generations that fit (at least
+  /// one). The refinement never runs inside it (it runs beside, see OnlineEstimator).
+  double update_budget_s = 0.08;
+  /// [s] a refinement running beside the generations stops after this long (its best so far is
+  /// handed over as usual).
+  double refine_max_s = 10.0;
   double stability_rollout_factor = 10.0;  ///< stability rollout length / window length
   /// Start the population at the model's values of the free parameters when all have one
   /// (resuming an autosaved model) instead of the paper's random initialisation.
@@ -43,6 +46,10 @@ std::string validateOptions(const OnlineEstimatorOptions& options);
 
 /// A snapshot of the current best model.
 struct Estimate {
+  /// The refinement beside the generations: how many have been handed over and how the last
+  /// ended ("" before the first).
+  uint32_t refinements = 0;
+  std::string last_refine_status;
   bool valid = false;               ///< false until the first update
   uint32_t generation = 0;
   uint64_t evaluations = 0;
@@ -65,10 +72,15 @@ struct InputCounters {
   uint64_t occluded_samples = 0;   ///< occluded or non-finite samples masked
 };
 
+/// The refinement of the best individual (the engine's periodic one) runs beside the generations
+/// on a thread of its own, on the window of the moment it starts; when it ends, its answer is
+/// offered to the population on the window of that moment. update() never waits for it, so an
+/// update takes about update_budget_s whatever the model's size.
 class OnlineEstimator {
  public:
   /// Throws InputError when the model or options are unusable.
   OnlineEstimator(const Model& model, const OnlineEstimatorOptions& options);
+  ~OnlineEstimator();
 
   /// Adds a frame in the model's particle order (thread-safe). Returns an empty string when
   /// accepted, else why it was rejected. Non-finite positions are masked as occluded.
@@ -77,6 +89,8 @@ class OnlineEstimator {
   /// Runs generations_per_update generations on the current window (call from one worker
   /// thread). Returns false when there are not enough frames yet.
   bool update();
+  /// Waits for a refinement running beside the generations (tests; update() never waits).
+  void waitForRefinement();
   /// The latest estimate (thread-safe copy).
   Estimate estimate() const;
   InputCounters counters() const;
@@ -115,10 +129,21 @@ class OnlineEstimator {
   Model model_;
   uint64_t model_version_ = 0;
 
-  mutable std::mutex update_mutex_;  // guards es_ and es_version_ (held through update())
+  /// The refinement running beside the generations (guarded by update_mutex_).
+  struct BackgroundRefinement;
+  /// Hands a finished refinement's answer to the population; starts the next one when due.
+  void handOverRefinement();
+  void startRefinement(std::shared_ptr<const Cost> cost);
+  void stopRefinement();
+
+  mutable std::mutex update_mutex_;  // guards es_, es_version_ and refinement_ (held through update())
   const OnlineEstimatorOptions options_;  // never changes after construction
   std::unique_ptr<EvolutionStrategy> es_;
   uint64_t es_version_ = 0;  // the model_version_ es_ was built for
+  std::unique_ptr<BackgroundRefinement> refinement_;
+  int last_refine_generation_ = -1;  // es_'s generation when the last refinement started
+  uint32_t refinements_done_ = 0;
+  std::string last_refine_status_;
   mutable std::mutex estimate_mutex_;  // guards estimate_ (readers never wait for an update)
   Estimate estimate_;
 };

@@ -4,6 +4,7 @@
 // (NLopt: BOBYQA, NEWUOA, PRAXIS; derivative-free) or Levenberg-Marquardt on the cost's residuals.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -33,6 +34,7 @@ enum class RefineStatus {
   kDeadline,          ///< the caller's deadline came (or the next Jacobian would pass it)
   kJacobianTooLarge,  ///< LM: the Jacobian outgrew its memory cap (the caller may fall back)
   kNotRun,            ///< the budget did not allow a single iteration
+  kCancelled,         ///< the caller's cancel flag was raised
 };
 const char* refineStatusName(RefineStatus status);
 
@@ -44,6 +46,15 @@ struct RefineSettings {
   uint64_t window_evaluations = 0;
   double stall_factor = 1.01;
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
+  /// Raised by another thread: the refinement stops at its next check (between evaluations, or
+  /// between Jacobians for LM), keeping its best point. Null: never.
+  const std::atomic<bool>* cancel = nullptr;
+  /// The deadline has passed or the cancel flag is raised.
+  bool mustStop() const {
+    return (cancel && cancel->load(std::memory_order_relaxed)) ||
+           (deadline != std::chrono::steady_clock::time_point::max() &&
+            std::chrono::steady_clock::now() > deadline);
+  }
   /// Genes the refinement may move (empty = all). Genes without a useful slope (the thresholds
   /// of conditional bonds: the cost is flat between switching events) stay where they are.
   std::vector<uint8_t> movable;

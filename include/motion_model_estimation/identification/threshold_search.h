@@ -19,4 +19,15 @@ namespace mme {
 RefineResult searchThresholds(const Cost& cost, const ParameterSpace& space,
                               const RefineStart& start, const RefineSettings& settings);
 
+/// Whether some gene of the space is a threshold with breakpoints (searchThresholds applies).
+bool hasThresholds(const ParameterSpace& space);
+
+/// One refinement as the engine runs it: `refiner` on settings.movable (the smooth genes), then,
+/// when the space has thresholds, the threshold search and `refiner` again in turn while the cost
+/// falls, at most `rounds` times, all inside settings' evaluation budget and deadline. The status
+/// is the first smooth refinement's.
+RefineResult refineAlternating(const Refiner& refiner, const Cost& cost, const ParameterSpace& space,
+                               const RefineStart& start, const RefineSettings& settings,
+                               ThreadPool* pool, int rounds = 3);
+
 }  // namespace mme

@@ -14,6 +14,9 @@ struct RandomObjectSpec {
   int bonds = 40;              ///< >= particles - 1 (a spanning tree keeps it connected)
   double frame_rate_hz = 120.0;
   double size_m = 0.3;         ///< edge of the cube the particles start in [m]
+  /// > 0: every type also has a free damping, drawn log-uniformly in [damping_max / 10,
+  /// damping_max] [N s/m] (light: the floating object keeps moving for tens of seconds).
+  double damping_max_nspm = 0.0;
   uint64_t seed = 1;
 };
 

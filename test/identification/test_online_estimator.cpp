@@ -1,0 +1,104 @@
+// The online estimator's engine: an update runs the generations its budget allows, the
+// refinement runs beside the generations and is handed over, and the estimate on a window gets
+// as good as the offline identification of the same window.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/identification/online_estimator.h"
+#include "test_helpers.h"
+
+namespace {
+
+using mme::test::maxRelativeError;
+
+/// Feeds frames [first, first + count) of `data` to the estimator.
+void feed(mme::OnlineEstimator* estimator, const mme::Trajectory& data, int first, int count) {
+  const int n = data.numMarkers();
+  for (int t = first; t < first + count; ++t) {
+    std::vector<Eigen::Vector3d> x(data.positions_m.begin() + t * n, data.positions_m.begin() + (t + 1) * n);
+    ASSERT_EQ(estimator->addFrame(data.times_s[t], x, {}), "");
+  }
+}
+
+struct Fixture {
+  mme::Model truth = mme::test::smallObject();
+  mme::Model search = mme::test::withoutValues(truth);
+  mme::Trajectory data = mme::simulateTrajectory(truth, 200, 100.0);
+  std::vector<double> true_values = mme::getValues(truth, mme::freeParameters(truth));
+};
+
+// A budget shorter than one generation: every update runs exactly one generation, whatever
+// generations_per_update says (the node's worker is never held longer).
+TEST(OnlineEstimator, AnUpdateRunsOnlyTheGenerationsItsBudgetAllows) {
+  Fixture f;
+  mme::OnlineEstimatorOptions options;
+  options.window_frames = 60;
+  options.generations_per_update = 5;
+  options.update_budget_s = 1e-9;
+  options.es.population = 20;
+  options.es.offspring = 20;
+  mme::OnlineEstimator estimator(f.search, options);
+  feed(&estimator, f.data, 0, 60);
+  for (int u = 1; u <= 4; ++u) {
+    ASSERT_TRUE(estimator.update());
+    EXPECT_EQ(estimator.estimate().generation, static_cast<uint32_t>(u));
+  }
+  options.update_budget_s = 10.0;
+  mme::OnlineEstimator roomy(f.search, options);
+  feed(&roomy, f.data, 0, 60);
+  ASSERT_TRUE(roomy.update());
+  EXPECT_EQ(roomy.estimate().generation, 5u);
+}
+
+// The refinement starts once the preset's schedule says (generation 5), runs on its own thread,
+// and its answer reaches the estimate at a later update; the sliding window then finds the truth.
+TEST(OnlineEstimator, TheRefinementRunsBesideTheGenerationsAndIsHandedOver) {
+  Fixture f;
+  mme::OnlineEstimatorOptions options;
+  options.window_frames = 60;
+  options.es.population = 30;
+  options.es.offspring = 30;
+  mme::OnlineEstimator estimator(f.search, options);
+  feed(&estimator, f.data, 0, 60);
+  ASSERT_TRUE(estimator.update());  // generations 1-5: the refinement starts after them
+  EXPECT_EQ(estimator.estimate().refinements, 0u);
+  estimator.waitForRefinement();
+  for (int t = 60; t < 120; t += 10) {
+    feed(&estimator, f.data, t, 10);
+    ASSERT_TRUE(estimator.update());
+    estimator.waitForRefinement();
+  }
+  const mme::Estimate e = estimator.estimate();
+  EXPECT_GE(e.refinements, 2u);
+  // At the answer a further refinement finds nothing to improve ("no_progress").
+  EXPECT_TRUE(e.last_refine_status == "converged" || e.last_refine_status == "no_progress")
+      << e.last_refine_status;
+  EXPECT_LT(maxRelativeError(e.values, f.true_values), 1e-6) << e.global_cost;
+}
+
+// On a window that stops sliding, the online estimate's cost comes within 2x of what identify
+// reaches on the same frames (the target for the live node).
+TEST(OnlineEstimator, OnAStillWindowTheEstimateMatchesTheOfflineIdentification) {
+  Fixture f;
+  mme::addGaussianNoise(&f.data, 1e-4, 11);
+  mme::OnlineEstimatorOptions options;
+  options.window_frames = 100;
+  mme::OnlineEstimator estimator(f.search, options);
+  feed(&estimator, f.data, 0, 100);
+  for (int u = 0; u < 12; ++u) {
+    ASSERT_TRUE(estimator.update());
+    estimator.waitForRefinement();
+  }
+  const mme::Trajectory window = estimator.window();
+  mme::IdentifyOptions offline = mme::identifyOptionsFor(mme::Preset::kDefault);
+  offline.estimate_std = false;
+  const mme::IdentifyResult r = mme::identifyModel(f.search, window, offline);
+  const double online = estimator.estimate().global_cost;
+  EXPECT_LE(online, 2.0 * r.global_cost) << "online " << online << ", identify " << r.global_cost;
+  EXPECT_GE(online, 0.5 * r.global_cost);
+}
+
+}  // namespace
