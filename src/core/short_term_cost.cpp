@@ -30,6 +30,7 @@
 
 #include "engine.h"
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/observations.h"
 #include "motion_model_estimation/core/spatial_grid.h"
 
 namespace mme {
@@ -180,27 +181,12 @@ struct ShortTermCost::Impl {
 ShortTermCost::ShortTermCost(const Model& model, const Trajectory& trajectory)
     : impl_(new Impl) {
   Impl& m = *impl_;
-  const std::string err = validateModel(model);
-  if (!err.empty()) throw InputError("model: " + err);
-  const int n = static_cast<int>(model.particles.size());
-  const int num_frames = trajectory.numFrames();
-  if (trajectory.numMarkers() != n) {
-    std::ostringstream e;
-    e << "trajectory has " << trajectory.numMarkers() << " markers but the model has " << n
-      << " particles (remap the markers to the model's particles first)";
-    throw InputError(e.str());
-  }
-  if (trajectory.positions_m.size() != static_cast<size_t>(n) * num_frames ||
-      trajectory.occluded.size() != static_cast<size_t>(n) * num_frames)
-    throw InputError("trajectory: positions/occluded do not hold frames x markers samples");
-  if (num_frames < 1) throw InputError("trajectory has no frames");
+  // Checks, the frame rate and the filled positions: shared with every cost.
+  Observations obs = prepareObservations(model, trajectory);
+  const int n = obs.particles;
+  const int num_frames = obs.frames;
   const bool static_mode = num_frames == 1;
-  // A single frame has no time base of its own: the step must come from the model.
-  if (static_mode && !(model.frame_rate_hz > 0.0))
-    throw InputError("a single-frame (static equilibrium) data set needs the model's frame_rate_hz");
-  const double rate_hz = model.frame_rate_hz > 0.0 ? model.frame_rate_hz : trajectory.frame_rate_hz;
-  if (!(rate_hz > 0.0) || !std::isfinite(rate_hz))
-    throw InputError("no frame rate: set frame_rate_hz in the model or the data");
+  const double rate_hz = obs.frame_rate_hz;
 
   m.n = n;
   m.substeps = model.substeps;
@@ -233,21 +219,8 @@ ShortTermCost::ShortTermCost(const Model& model, const Trajectory& trajectory)
     inter_fixed_cutoff.push_back(!p.free);
   }
 
-  // Occluded samples get the last known position (else the first known, else the model's):
-  // finite values keep NaN out; the terms they could influence are dropped below.
   const size_t n3 = 3 * static_cast<size_t>(n);
-  m.pos.assign(n3 * num_frames, 0.0);
-  for (int i = 0; i < n; ++i) {
-    int first_known = -1;
-    for (int t = 0; t < num_frames; ++t)
-      if (!trajectory.isOccluded(t, i)) { first_known = t; break; }
-    Eigen::Vector3d fill = first_known >= 0 ? trajectory.position(first_known, i)
-                                            : model.particles[i].position_m;
-    for (int t = 0; t < num_frames; ++t) {
-      if (!trajectory.isOccluded(t, i)) fill = trajectory.position(t, i);
-      for (int k = 0; k < 3; ++k) m.pos[t * n3 + 3 * i + k] = fill[k];
-    }
-  }
+  m.pos = std::move(obs.positions_m);
 
   // Bond graph for the "within substeps hops" rule (CSR adjacency).
   std::vector<std::vector<int>> adj_lists(n);

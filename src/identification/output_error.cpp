@@ -1,0 +1,364 @@
+// Multiple shooting with Ceres. One residual block per segment: its observed samples (weighted by
+// 1 / sigma) and its continuity to the next segment's start (weighted continuity_weight / sigma).
+// Parameter blocks: the smooth genes (theta, shared by every segment, bounded as the search space)
+// and one state per segment (positions and velocity x h of the free particles, metres both). A
+// segment's Jacobian is by forward differences through the simulator (one short simulation per
+// column); the continuity's derivative along the next state is -I exactly. The linear solver is
+// sparse Cholesky of the normal equations (block-tridiagonal states bordered by theta).
+#include "motion_model_estimation/identification/output_error.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <Eigen/Sparse>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/observations.h"
+#include "motion_model_estimation/core/simulator.h"
+
+namespace mme {
+
+double estimateMarkerNoise(const Trajectory& trajectory) {
+  const int frames = trajectory.numFrames(), n = trajectory.numMarkers();
+  std::vector<double> squares;
+  for (int i = 0; i < n; ++i)
+    for (int t = 2; t + 2 < frames; ++t) {
+      bool seen = true;
+      for (int j = -2; j <= 2 && seen; ++j) seen = !trajectory.isOccluded(t + j, i);
+      if (!seen) continue;
+      const Eigen::Vector3d d4 = trajectory.position(t - 2, i) - 4.0 * trajectory.position(t - 1, i) +
+                                 6.0 * trajectory.position(t, i) - 4.0 * trajectory.position(t + 1, i) +
+                                 trajectory.position(t + 2, i);
+      for (int c = 0; c < 3; ++c) squares.push_back(d4[c] * d4[c]);
+    }
+  if (squares.size() < 10) return 0.0;
+  std::nth_element(squares.begin(), squares.begin() + squares.size() / 2, squares.end());
+  // The median of a chi-square with one degree of freedom is 0.4549 of its mean.
+  return std::sqrt(squares[squares.size() / 2] / 0.4549 / 70.0);
+}
+
+namespace {
+
+/// What every segment shares (read-only during the solve).
+struct Problem {
+  Model model;                      // values of fixed parameters; free ones set per evaluation
+  std::vector<ParamRef> refs;
+  const ParameterSpace* space = nullptr;
+  std::vector<double> base_genes;   // the start: thresholds keep these
+  std::vector<int> smooth;          // gene indices Ceres moves (theta order)
+  std::vector<int> free_particles;  // particle indices in the state
+  Observations obs;
+  double h = 0.0;                   // frame period [s]
+  double w_obs = 1.0;               // 1 / sigma
+  double w_cont = 1.0;              // continuity_weight / sigma
+
+  int stateSize() const { return 6 * static_cast<int>(free_particles.size()); }
+};
+
+/// One shooting segment: frames [first, last]; observations at first..last-1 (and at last for
+/// the final segment); continuity at `last` with the next segment's state when there is one.
+class SegmentCost final : public ceres::CostFunction {
+ public:
+  SegmentCost(const Problem* p, int first, int last, bool has_next)
+      : p_(p), first_(first), last_(last), has_next_(has_next), sim_(p->model) {
+    observed_ = 0;
+    const int end = has_next ? last : last + 1;
+    for (int t = first; t < end; ++t)
+      for (int i : p->free_particles) observed_ += p->obs.isOccluded(t, i) ? 0 : 1;
+    set_num_residuals(3 * observed_ + (has_next ? p->stateSize() : 0));
+    mutable_parameter_block_sizes()->push_back(static_cast<int32_t>(p->smooth.size()));
+    mutable_parameter_block_sizes()->push_back(p->stateSize());
+    if (has_next) mutable_parameter_block_sizes()->push_back(p->stateSize());
+  }
+
+  int observedSamples() const { return observed_; }
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const int m = num_residuals();
+    const int np = static_cast<int>(p_->smooth.size()), ns = p_->stateSize();
+    const double* theta = parameters[0];
+    const double* state = parameters[1];
+    const double* next = has_next_ ? parameters[2] : nullptr;
+    if (!simulate(theta, state, next, residuals)) return false;
+    if (!jacobians) return true;
+    std::vector<double> perturbed(m);
+    if (jacobians[0]) {
+      std::vector<double> th(theta, theta + np);
+      for (int j = 0; j < np; ++j) {
+        const Gene& g = p_->space->gene(p_->smooth[j]);
+        double step = 1e-7 * std::max({std::fabs(th[j]), 1e-3 * (g.upper - g.lower), 1e-8});
+        if (th[j] + step > g.upper) step = -step;
+        th[j] += step;
+        const bool ok = simulate(th.data(), state, next, perturbed.data());
+        th[j] = theta[j];
+        for (int r = 0; r < m; ++r)
+          jacobians[0][r * np + j] = ok ? (perturbed[r] - residuals[r]) / step : 0.0;
+      }
+    }
+    if (jacobians[1]) {
+      std::vector<double> st(state, state + ns);
+      for (int j = 0; j < ns; ++j) {
+        const double step = 1e-7 * std::max(std::fabs(st[j]), 1e-2);
+        st[j] += step;
+        const bool ok = simulate(theta, st.data(), next, perturbed.data());
+        st[j] = state[j];
+        for (int r = 0; r < m; ++r)
+          jacobians[1][r * ns + j] = ok ? (perturbed[r] - residuals[r]) / step : 0.0;
+      }
+    }
+    if (has_next_ && jacobians[2]) {
+      std::fill(jacobians[2], jacobians[2] + static_cast<size_t>(m) * ns, 0.0);
+      const int offset = 3 * observed_;
+      for (int j = 0; j < ns; ++j) jacobians[2][(offset + j) * ns + j] = -p_->w_cont;
+    }
+    return true;
+  }
+
+  /// Residuals of the segment for theta (smooth genes), its start state and the next one's.
+  bool simulate(const double* theta, const double* state, const double* next, double* out) const {
+    std::vector<double> genes = p_->base_genes;
+    for (size_t j = 0; j < p_->smooth.size(); ++j) genes[p_->smooth[j]] = theta[j];
+    setValues(model_, p_->refs, p_->space->toPhysical(genes));
+    sim_.setParameters(model_);
+    const int n = p_->obs.particles;
+    State s;
+    s.x_m.resize(n);
+    s.v_mps.resize(n);
+    for (int i = 0; i < n; ++i) {
+      const double* x = p_->obs.position(first_, i);
+      s.x_m[i] = Eigen::Vector3d(x[0], x[1], x[2]);
+      s.v_mps[i] = model_.particles[i].velocity_mps;  // fixed particles keep the model's
+    }
+    const double h = p_->h;
+    for (size_t f = 0; f < p_->free_particles.size(); ++f) {
+      const int i = p_->free_particles[f];
+      s.x_m[i] = Eigen::Vector3d(state[6 * f], state[6 * f + 1], state[6 * f + 2]);
+      s.v_mps[i] = Eigen::Vector3d(state[6 * f + 3], state[6 * f + 4], state[6 * f + 5]) / h;
+    }
+    int r = 0;
+    const auto observe = [&](int t) {
+      for (int i : p_->free_particles) {
+        if (p_->obs.isOccluded(t, i)) continue;
+        const double* y = p_->obs.position(t, i);
+        for (int c = 0; c < 3; ++c) out[r++] = p_->w_obs * (s.x_m[i][c] - y[c]);
+      }
+    };
+    observe(first_);
+    for (int t = first_ + 1; t <= last_; ++t) {
+      sim_.stepFrame(&s, h);
+      if (t < last_ || !has_next_) observe(t);
+    }
+    if (has_next_) {
+      // Continuity in the state's own order: x x x, v h v h v h per particle.
+      for (size_t f = 0; f < p_->free_particles.size(); ++f) {
+        const int i = p_->free_particles[f];
+        for (int c = 0; c < 3; ++c) out[r + 6 * f + c] = p_->w_cont * (s.x_m[i][c] - next[6 * f + c]);
+        for (int c = 0; c < 3; ++c)
+          out[r + 6 * f + 3 + c] = p_->w_cont * (s.v_mps[i][c] * h - next[6 * f + 3 + c]);
+      }
+    }
+    for (int k = 0; k < num_residuals(); ++k)
+      if (!std::isfinite(out[k])) return false;
+    return true;
+  }
+
+ private:
+  const Problem* p_;
+  int first_, last_;
+  bool has_next_;
+  int observed_ = 0;
+  mutable Model model_ = p_->model;
+  mutable Simulator sim_;
+};
+
+/// Start state of frame t from the data: the position, and the velocity x h from a central
+/// difference (one-sided at the ends, 0 where a neighbour is occluded).
+void dataState(const Problem& p, int t, double* state) {
+  const Observations& o = p.obs;
+  for (size_t f = 0; f < p.free_particles.size(); ++f) {
+    const int i = p.free_particles[f];
+    const double* x = o.position(t, i);
+    for (int c = 0; c < 3; ++c) state[6 * f + c] = x[c];
+    const int a = std::max(t - 1, 0), b = std::min(t + 1, o.frames - 1);
+    const bool known = b > a && !o.isOccluded(a, i) && !o.isOccluded(b, i);
+    for (int c = 0; c < 3; ++c)
+      state[6 * f + 3 + c] = known ? (o.position(b, i)[c] - o.position(a, i)[c]) / (b - a) : 0.0;
+  }
+}
+
+}  // namespace
+
+OutputErrorResult estimateOutputError(const Model& model, const Trajectory& trajectory,
+                                      const ParameterSpace& space,
+                                      const std::vector<double>& start_genes,
+                                      const OutputErrorOptions& options) {
+  const auto began = std::chrono::steady_clock::now();
+  OutputErrorResult out;
+  out.genes = start_genes;
+  out.values = space.toPhysical(start_genes);
+  out.std_devs.assign(start_genes.size(), std::numeric_limits<double>::quiet_NaN());
+  out.unidentifiable.assign(start_genes.size(), 0);
+  if (options.segment_frames < 2 || !(options.continuity_weight > 0.0)) {
+    out.reason = "segment_frames must be >= 2 and continuity_weight > 0";
+    return out;
+  }
+  auto p = std::make_unique<Problem>();
+  p->obs = prepareObservations(model, trajectory);
+  if (p->obs.frames < 3) {
+    out.reason = "fewer than 3 frames";
+    return out;
+  }
+  p->model = model;
+  p->model.frame_rate_hz = p->obs.frame_rate_hz;
+  p->refs = freeParameters(model);
+  p->space = &space;
+  p->base_genes = start_genes;
+  for (size_t k = 0; k < space.size(); ++k)
+    if (space.gene(k).smooth) p->smooth.push_back(static_cast<int>(k));
+  for (size_t i = 0; i < model.particles.size(); ++i)
+    if (!model.particles[i].fixed) p->free_particles.push_back(static_cast<int>(i));
+  if (p->smooth.empty() || p->free_particles.empty()) {
+    out.reason = "no smooth free parameter or no free particle";
+    return out;
+  }
+  p->h = p->obs.frame_period_s;
+  out.noise_std_prior_m =
+      options.noise_std_m > 0.0 ? options.noise_std_m : std::max(estimateMarkerNoise(trajectory), 1e-9);
+  p->w_obs = 1.0 / out.noise_std_prior_m;
+  p->w_cont = options.continuity_weight / out.noise_std_prior_m;
+
+  // Segments of K frames; the last one takes the remainder (at least 2 frames).
+  const int frames = p->obs.frames, K = options.segment_frames;
+  std::vector<std::pair<int, int>> segments;
+  for (int first = 0; first < frames - 1; first += K) {
+    int last = std::min(first + K, frames - 1);
+    if (frames - 1 - last < 2 && last < frames - 1) last = frames - 1;
+    segments.emplace_back(first, last);
+    if (last == frames - 1) break;
+  }
+  const int S = static_cast<int>(segments.size());
+  const int ns = p->stateSize();
+  std::vector<double> theta(p->smooth.size());
+  for (size_t j = 0; j < p->smooth.size(); ++j) theta[j] = start_genes[p->smooth[j]];
+  std::vector<std::vector<double>> states(S, std::vector<double>(ns));
+  for (int s = 0; s < S; ++s) dataState(*p, segments[s].first, states[s].data());
+
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  problem.AddParameterBlock(theta.data(), static_cast<int>(theta.size()));
+  for (size_t j = 0; j < p->smooth.size(); ++j) {
+    const Gene& g = space.gene(p->smooth[j]);
+    problem.SetParameterLowerBound(theta.data(), static_cast<int>(j), g.lower);
+    problem.SetParameterUpperBound(theta.data(), static_cast<int>(j), g.upper);
+  }
+  for (int s = 0; s < S; ++s) problem.AddParameterBlock(states[s].data(), ns);
+  std::vector<const SegmentCost*> costs;
+  for (int s = 0; s < S; ++s) {
+    const bool has_next = s + 1 < S;
+    auto* cost = new SegmentCost(p.get(), segments[s].first, segments[s].second, has_next);
+    costs.push_back(cost);
+    out.observations += 3 * cost->observedSamples();
+    if (has_next) problem.AddResidualBlock(cost, nullptr, theta.data(), states[s].data(), states[s + 1].data());
+    else problem.AddResidualBlock(cost, nullptr, theta.data(), states[s].data());
+  }
+  out.segments = S;
+  // The observation part of the cost, unweighted [m^2].
+  const auto observationCost = [&]() {
+    double sum = 0.0;
+    for (int s = 0; s < S; ++s) {
+      std::vector<double> r(costs[s]->num_residuals());
+      const double* next = s + 1 < S ? states[s + 1].data() : nullptr;
+      if (!costs[s]->simulate(theta.data(), states[s].data(), next, r.data()))
+        return std::numeric_limits<double>::infinity();
+      for (int k = 0; k < 3 * costs[s]->observedSamples(); ++k) sum += r[k] * r[k];
+    }
+    return sum / (p->w_obs * p->w_obs);
+  };
+  out.start_cost_m2 = observationCost();
+
+  ceres::Solver::Options solver;
+  solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  solver.max_num_iterations = options.max_iterations;
+  solver.num_threads = std::max(1, options.threads);
+  solver.function_tolerance = 1e-14;
+  solver.gradient_tolerance = 1e-16;
+  solver.parameter_tolerance = 1e-12;
+  if (options.max_time_s > 0.0) solver.max_solver_time_in_seconds = options.max_time_s;
+  solver.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+  out.ran = true;
+  out.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  out.converged = summary.termination_type == ceres::CONVERGENCE;
+  out.termination = summary.message;
+  out.observation_cost_m2 = observationCost();
+  for (size_t j = 0; j < p->smooth.size(); ++j) out.genes[p->smooth[j]] = theta[j];
+  out.values = space.toPhysical(out.genes);
+  const int unknowns = static_cast<int>(theta.size()) + S * ns;
+  const int dof = std::max(1, out.observations - unknowns);
+  out.noise_std_m = std::sqrt(out.observation_cost_m2 / dof);
+
+  if (options.estimate_std) {
+    // Fisher information of theta with the states eliminated (Schur complement):
+    // I = A - B C^-1 B^T from J^T J = [A B; B^T C], then Cov = I^+ (sigma_hat / sigma_prior)^2.
+    ceres::CRSMatrix crs;
+    ceres::Problem::EvaluateOptions eval;
+    eval.parameter_blocks.push_back(theta.data());
+    for (int s = 0; s < S; ++s) eval.parameter_blocks.push_back(states[s].data());
+    if (problem.Evaluate(eval, nullptr, nullptr, nullptr, &crs)) {
+      const int np = static_cast<int>(theta.size());
+      Eigen::SparseMatrix<double> j(crs.num_rows, crs.num_cols);
+      std::vector<Eigen::Triplet<double>> entries;
+      for (int row = 0; row < crs.num_rows; ++row)
+        for (int e = crs.rows[row]; e < crs.rows[row + 1]; ++e)
+          entries.emplace_back(row, crs.cols[e], crs.values[e]);
+      j.setFromTriplets(entries.begin(), entries.end());
+      const Eigen::SparseMatrix<double> jtj = Eigen::SparseMatrix<double>(j.transpose() * j);
+      const Eigen::MatrixXd a = Eigen::MatrixXd(jtj.topLeftCorner(np, np));
+      const Eigen::MatrixXd b = Eigen::MatrixXd(jtj.topRightCorner(np, crs.num_cols - np));
+      const Eigen::SparseMatrix<double> c = jtj.bottomRightCorner(crs.num_cols - np, crs.num_cols - np);
+      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(c);
+      Eigen::MatrixXd info = a;
+      if (ldlt.info() == Eigen::Success) info -= b * ldlt.solve(Eigen::MatrixXd(b.transpose()));
+      // Scaled to unit diagonal; directions with a relative eigenvalue below 1e-10 are what the
+      // data do not determine.
+      Eigen::VectorXd d = info.diagonal().cwiseMax(0.0).cwiseSqrt();
+      for (int k = 0; k < np; ++k) d[k] = d[k] > 0.0 ? 1.0 / d[k] : 0.0;
+      const Eigen::MatrixXd scaled = d.asDiagonal() * info * d.asDiagonal();
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled);
+      const Eigen::VectorXd lambda = eig.eigenvalues();
+      const double top = std::max(lambda.maxCoeff(), 1e-300);
+      Eigen::MatrixXd pinv = Eigen::MatrixXd::Zero(np, np);
+      Eigen::VectorXd null_loading = Eigen::VectorXd::Zero(np);
+      for (int q = 0; q < np; ++q) {
+        const Eigen::VectorXd v = eig.eigenvectors().col(q);
+        if (lambda[q] > 1e-10 * top) pinv += v * v.transpose() / lambda[q];
+        else null_loading += v.cwiseProduct(v);
+      }
+      const double scale2 = std::pow(out.noise_std_m / out.noise_std_prior_m, 2);
+      for (int k = 0; k < np; ++k) {
+        const size_t gene = static_cast<size_t>(p->smooth[k]);
+        const double gene_var = pinv(k, k) * d[k] * d[k] * scale2;
+        const double sd = std::abs(space.physicalSlope(gene, out.genes)) * std::sqrt(std::max(gene_var, 0.0));
+        if (null_loading[k] > 0.5 || !(d[k] > 0.0)) {
+          out.unidentifiable[gene] = 1;
+          continue;
+        }
+        out.std_devs[gene] = sd;
+        if (sd > std::abs(out.values[gene])) out.unidentifiable[gene] = 1;
+      }
+    }
+  }
+  out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+  return out;
+}
+
+}  // namespace mme
