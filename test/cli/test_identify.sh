@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # identify: recovers paper_object's 20 parameters from a trajectory file and a model without
 # values (Levenberg-Marquardt refinement from generation 5), writes the same model for any
-# thread count, and refuses bad refinement options and missing files with exit 2.
+# thread count, warns about a file cut short of its header's frame count and uses its rows, and
+# refuses bad refinement options and missing files with exit 2.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/../.." && pwd)
 source "$here/scripts/env.sh"
@@ -14,7 +15,8 @@ sed -E 's/\{value: [^,]*, free: true/{free: true/' "$tmp/truth.yaml" >"$tmp/free
 ! grep -q "value:" "$tmp/free.yaml"
 fast=(--refine levenberg_marquardt --refine-start 5 --refine-period 5 --generations 10)
 "$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/one.yaml" \
-  "${fast[@]}" --quiet >/dev/null
+  "${fast[@]}" --quiet >/dev/null 2>"$tmp/one.err"
+[ ! -s "$tmp/one.err" ] || { echo "warnings on a whole file: $(cat "$tmp/one.err")"; exit 1; }
 "$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/two.yaml" \
   "${fast[@]}" --threads 2 --quiet >/dev/null
 # Same seed and input: the same model for 1 and 2 threads (only the recorded wall time differs).
@@ -26,6 +28,17 @@ paste <(values "$tmp/truth.yaml") <(values "$tmp/one.yaml") | awk '
   { e = ($2 - $1) / $1; if (e < 0) e = -e; if (e > worst) worst = e; n++ }
   END { printf "identify: max relative error %.3g over %d parameters\n", worst, n;
         exit !(n == 20 && worst < 1e-6) }'
+
+# A cut-off copy (the header, the blank line and 14 of the 60 rows NumFrames declares): identify
+# says so on stderr, naming the file and both counts, and goes on with the 14 frames.
+head -n 20 "$tmp/data.trc" >"$tmp/cut.trc"
+"$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/cut.trc" --out "$tmp/cut.yaml" \
+  --generations 2 --quiet >/dev/null 2>"$tmp/cut.err" ||
+  { echo "identify failed on the cut-off file: $(cat "$tmp/cut.err")"; exit 1; }
+expected="identify: warning: $tmp/cut.trc: header declares 60 frames, found 14 (file cut short?)"
+[ "$(cat "$tmp/cut.err")" = "$expected" ] ||
+  { echo "expected stderr '$expected', got '$(cat "$tmp/cut.err")'"; exit 1; }
+grep -q "frames: 14" "$tmp/cut.yaml" || { echo "cut.yaml does not record 14 frames:"; cat "$tmp/cut.yaml"; exit 1; }
 
 expect_exit2() {  # expect_exit2 PATTERN ARGS... : exit code 2 and PATTERN in a one-line stderr
   local pattern=$1; shift
