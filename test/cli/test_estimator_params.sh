@@ -13,9 +13,11 @@ node="$devel/lib/motion_model_estimation/estimator_node"
 # shellcheck disable=SC1091
 set +u; source "$devel/setup.bash"; set -u
 model="$here/config/models/paper_object.yaml"
+# shellcheck disable=SC1091
+source "$here/scripts/free_port.sh"
+port=$(free_port test_estimator_params) || exit 1
 tmp=$(mktemp -d)
 export ROS_HOME="$tmp/ros_home"   # logs of roscore and the nodes stay in the temp dir
-port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
 export ROS_MASTER_URI="http://localhost:$port"
 roscore -p "$port" >"$tmp/roscore.log" 2>&1 &
 core=$!
