@@ -25,9 +25,9 @@ std::string fileExtension(const std::string& path) {
   return ext;
 }
 
-Trajectory readTrajectoryFile(const std::string& path) {
+Trajectory readTrajectoryFile(const std::string& path, std::vector<std::string>* warnings) {
   const std::string ext = fileExtension(path);
-  if (ext == ".trc") return readTrc(path);
+  if (ext == ".trc") return readTrc(path, warnings);
   if (ext == ".c3d") return readC3d(path);
   throw InputError(path + ": unsupported trajectory file extension '" + ext +
                    "' (expected .trc, .c3d, or .bag via the ROS tools)");

@@ -103,7 +103,7 @@ std::string formatDouble(double v) {
 
 }  // namespace
 
-Trajectory readTrc(const std::string& path) {
+Trajectory readTrc(const std::string& path, std::vector<std::string>* warnings) {
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, 0, std::string("cannot open: ") + std::strerror(errno));
   LineReader reader(in);
@@ -222,9 +222,26 @@ Trajectory readTrc(const std::string& path) {
     }
   }
   if (in.bad()) fail(path, reader.number(), "read error");
-  if (trajectory.times_s.empty()) fail(path, reader.number(), "no data rows");
-  // NumFrames is not checked against the rows: the rows are the data, and truncated or
+  // The rows are the data; NumFrames only serves to notice a file that ends early (a cut-off
+  // copy, an interrupted export): fewer rows than declared is a warning, the rows read are
+  // returned. More rows than declared, or a NumFrames that is not a count, is left alone:
   // hand-edited files commonly keep a stale NumFrames.
+  long declared_frames = -1;
+  if (const auto it = meta.find("NumFrames"); it != meta.end()) {
+    double value = 0.0;
+    if (parseDouble(it->second, &value) && value >= 0.0 && value == std::floor(value) &&
+        value <= std::numeric_limits<int>::max())
+      declared_frames = static_cast<long>(value);
+  }
+  const long found_frames = static_cast<long>(trajectory.times_s.size());
+  if (found_frames == 0)
+    fail(path, reader.number(),
+         declared_frames > 0
+             ? "no data rows (header declares " + std::to_string(declared_frames) + " frames)"
+             : std::string("no data rows"));
+  if (found_frames < declared_frames && warnings)
+    warnings->push_back(path + ": header declares " + std::to_string(declared_frames) +
+                        " frames, found " + std::to_string(found_frames) + " (file cut short?)");
   return trajectory;
 }
 

@@ -24,9 +24,14 @@ const char* kUsage =
     "                [--refine bobyqa|newuoa|praxis|levenberg_marquardt] [--refine-start G]\n"
     "                [--refine-period G]\n";
 
+/// Reads the trajectory; the reader's warnings (e.g. a TRC file cut short) go to stderr.
 mme::Trajectory loadTrajectory(const std::string& path, const std::string& topic) {
   if (mme::fileExtension(path) == ".bag") return mme::readBag(path, topic);
-  return mme::readTrajectoryFile(path);
+  std::vector<std::string> warnings;
+  mme::Trajectory trajectory = mme::readTrajectoryFile(path, &warnings);
+  for (const std::string& warning : warnings)
+    std::fprintf(stderr, "identify: warning: %s\n", warning.c_str());
+  return trajectory;
 }
 
 /// Frames [first, first + count) of a trajectory.

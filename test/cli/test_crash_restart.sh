@@ -18,11 +18,9 @@ cleanup() {
 }
 trap cleanup EXIT
 
-port=""
-for p in $(shuf -i 20000-60000 -n 50); do
-  if ! (exec 3<>"/dev/tcp/127.0.0.1/$p") 2>/dev/null; then port=$p; break; fi
-done
-[ -n "$port" ] || { echo "no free port"; exit 1; }
+# shellcheck disable=SC1091
+source "$here/scripts/free_port.sh"
+port=$(free_port test_crash_restart) || exit 1
 export ROS_MASTER_URI=http://127.0.0.1:$port ROS_HOME="$tmp/ros_home"
 roscore -p "$port" >"$tmp/roscore.log" 2>&1 &
 pids+=($!)

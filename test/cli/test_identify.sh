@@ -2,7 +2,8 @@
 # identify: with its defaults (no option) recovers paper_object's 20 parameters from a trajectory
 # file and a model without values and stops once converged; writes the same model for any thread
 # count; --preset paper runs the paper's schedule; a parameter on a user's bound is flagged in the
-# table, on stderr and in the export; bad options and missing files give exit 2.
+# table, on stderr and in the export; a file cut short of its header's frame count is reported
+# and its rows used; bad options and missing files give exit 2.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/../.." && pwd)
 source "$here/scripts/env.sh"
@@ -14,9 +15,10 @@ tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 sed -E 's/\{value: [^,]*, free: true/{free: true/' "$tmp/truth.yaml" >"$tmp/free.yaml"
 ! grep -q "value:" "$tmp/free.yaml"
 "$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/one.yaml" \
-  >"$tmp/one.log"
+  >"$tmp/one.log" 2>"$tmp/one.err"
 grep -q "preset default (refinement levenberg_marquardt from generation 5, every 5)" "$tmp/one.log"
 grep -q "^stopped: converged" "$tmp/one.log"
+[ ! -s "$tmp/one.err" ] || { echo "warnings on a whole file: $(cat "$tmp/one.err")"; exit 1; }
 "$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/two.yaml" \
   --threads 2 --quiet >/dev/null
 # Same seed and input: the same model for 1 and 2 threads (only the recorded wall time differs).
@@ -44,6 +46,17 @@ grep -q "max: 8}" "$tmp/bounded.yaml"
 grep -E -q "^s00/stiffness +8(\.0*)? .*at_upper_bound$" "$tmp/bounded.log"
 grep -q "ended within 1 % of a search bound" "$tmp/bounded.err"
 grep -q "s00/stiffness: at_upper_bound" "$tmp/bounded_out.yaml"
+
+# A cut-off copy (the header, the blank line and 14 of the 60 rows NumFrames declares): identify
+# says so on stderr, naming the file and both counts, and goes on with the 14 frames.
+head -n 20 "$tmp/data.trc" >"$tmp/cut.trc"
+"$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/cut.trc" --out "$tmp/cut.yaml" \
+  --generations 2 --quiet >/dev/null 2>"$tmp/cut.err" ||
+  { echo "identify failed on the cut-off file: $(cat "$tmp/cut.err")"; exit 1; }
+expected="identify: warning: $tmp/cut.trc: header declares 60 frames, found 14 (file cut short?)"
+[ "$(cat "$tmp/cut.err")" = "$expected" ] ||
+  { echo "expected stderr '$expected', got '$(cat "$tmp/cut.err")'"; exit 1; }
+grep -q "frames: 14" "$tmp/cut.yaml" || { echo "cut.yaml does not record 14 frames:"; cat "$tmp/cut.yaml"; exit 1; }
 
 expect_exit2() {  # expect_exit2 PATTERN ARGS... : exit code 2 and PATTERN in a one-line stderr
   local pattern=$1; shift

@@ -1,7 +1,8 @@
 // Tests of the TRC reader/writer and the extension dispatch: the real OpenSim files load with
 // the counts, rates and values they hold, layout variations (CRLF, trailing tabs, short rows,
-// empty/0,0,0/NaN gaps) parse, write/read round trips are exact to 1e-9 m, and every kind of
-// bad input gives an InputError naming the file (and line).
+// empty/0,0,0/NaN gaps) parse, a file with fewer rows than its NumFrames (a cut-off copy) gives a
+// warning and its rows, write/read round trips are exact to 1e-9 m, and every kind of bad input
+// gives an InputError naming the file (and line).
 
 #include <gtest/gtest.h>
 #include <stdlib.h>
@@ -206,6 +207,77 @@ TEST_F(TrcTest, MetresNanGapsAndStaleNumMarkers) {
   EXPECT_TRUE(t.isOccluded(1, 0));
   EXPECT_TRUE(t.position(1, 0).isZero(0.0));
   EXPECT_EQ(t.frame_numbers, (std::vector<uint32_t>{7, 8}));
+}
+
+// ----------------------------------------------------------------------------- cut-off files
+
+/// The first `lines` lines of a text file, each with its '\n'.
+std::string firstLines(const std::string& path, int lines) {
+  std::ifstream in(path, std::ios::binary);
+  std::string out, line;
+  for (int k = 0; k < lines && std::getline(in, line); ++k) out += line + "\n";
+  return out;
+}
+
+TEST_F(TrcTest, CutOffCopyWarnsWithDeclaredAndFoundFramesAndKeepsTheRows) {
+  // A cut-off copy of a real file: its 5 header lines, the blank line and the first 14 of the
+  // 151 rows its NumFrames declares.
+  const Trajectory full = readTrc(kReal + "subject01_walk1.trc");
+  ASSERT_EQ(full.numFrames(), 151);
+  const std::string path = write("cut.trc", firstLines(kReal + "subject01_walk1.trc", 6 + 14));
+  std::vector<std::string> warnings;
+  const Trajectory t = readTrc(path, &warnings);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], path + ": header declares 151 frames, found 14 (file cut short?)");
+  // The rows that are there, as in the whole file.
+  ASSERT_EQ(t.numFrames(), 14);
+  EXPECT_EQ(t.marker_names, full.marker_names);
+  EXPECT_DOUBLE_EQ(t.frame_rate_hz, 60.0);
+  EXPECT_EQ(t.validate(), "");
+  EXPECT_EQ(t.frame_numbers,
+            std::vector<uint32_t>(full.frame_numbers.begin(), full.frame_numbers.begin() + 14));
+  EXPECT_EQ(t.times_s, std::vector<double>(full.times_s.begin(), full.times_s.begin() + 14));
+  const size_t samples = 14 * static_cast<size_t>(full.numMarkers());
+  ASSERT_EQ(t.positions_m.size(), samples);
+  for (size_t k = 0; k < samples; ++k) EXPECT_EQ(t.positions_m[k], full.positions_m[k]) << k;
+  EXPECT_EQ(t.occluded, std::vector<uint8_t>(full.occluded.begin(), full.occluded.begin() + samples));
+
+  // Through the extension dispatch, the same warning; without a list the rows still load.
+  std::vector<std::string> dispatched;
+  EXPECT_EQ(readTrajectoryFile(path, &dispatched).numFrames(), 14);
+  EXPECT_EQ(dispatched, warnings);
+  EXPECT_EQ(readTrc(path).numFrames(), 14);
+}
+
+TEST_F(TrcTest, NoWarningForCompleteFilesOrMoreRowsThanDeclared) {
+  for (const char* file : {"subject01_walk1.trc", "motion_capture_walk.trc", "arm26_elbow_flex.trc"}) {
+    SCOPED_TRACE(file);
+    std::vector<std::string> warnings;
+    readTrc(kReal + file, &warnings);
+    EXPECT_EQ(warnings, std::vector<std::string>{});
+  }
+  // A stale NumFrames below the row count, or one that is not a count: the rows are the data.
+  const std::string rows = "Frame#\tTime\tP\n\t\tX1\tY1\tZ1\n1\t0\t1\t2\t3\n2\t0.1\t1\t2\t3\n";
+  for (const char* num_frames : {"1", "2", "n/a", "-3", "2.5"}) {
+    SCOPED_TRACE(num_frames);
+    const std::string path = write("stale.trc", std::string(kHeader) + "10\t10\t" + num_frames +
+                                                    "\t1\tmm\t10\t1\t2\n" + rows);
+    std::vector<std::string> warnings;
+    EXPECT_EQ(readTrc(path, &warnings).numFrames(), 2);
+    EXPECT_EQ(warnings, std::vector<std::string>{});
+  }
+  // One row short of NumFrames 3: warned.
+  const std::string path =
+      write("short.trc", std::string(kHeader) + "10\t10\t3\t1\tmm\t10\t1\t3\n" + rows);
+  std::vector<std::string> warnings;
+  EXPECT_EQ(readTrc(path, &warnings).numFrames(), 2);
+  EXPECT_EQ(warnings, std::vector<std::string>{path + ": header declares 3 frames, found 2 (file cut short?)"});
+}
+
+TEST_F(TrcTest, CutBeforeTheFirstRowIsAnErrorNamingTheDeclaredFrames) {
+  const std::string path = write("header_only.trc", firstLines(kReal + "subject01_walk1.trc", 6));
+  expectInputError([&] { readTrc(path); },
+                   {"header_only.trc", "no data rows (header declares 151 frames)"});
 }
 
 // ----------------------------------------------------------------------------- round trips

@@ -2,13 +2,17 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "motion_model_estimation/core/trajectory.h"
 
 namespace mme {
 
 /// ".trc" / ".c3d" (case-insensitive) -> reader; other extensions throw InputError.
-Trajectory readTrajectoryFile(const std::string& path);
+/// The reader's warnings (see readTrc; readC3d has none: a C3D file cut short is an error) are
+/// appended to `warnings` when given, for the caller to show.
+Trajectory readTrajectoryFile(const std::string& path,
+                              std::vector<std::string>* warnings = nullptr);
 /// Lower-case extension including the dot ("" when none).
 std::string fileExtension(const std::string& path);
 
