@@ -1,0 +1,34 @@
+// formatStats: the ~stats line, field by field, and the fields that wait for their first value.
+#include <gtest/gtest.h>
+
+#include "motion_model_estimation/live/estimator_stats.h"
+
+namespace {
+
+TEST(EstimatorStats, CountersOnlyBeforeAnyMarkers) {
+  mme::EstimatorStats s;
+  s.input.accepted = 120;
+  s.input.occluded_samples = 7;
+  s.input.rejected_time = 2;
+  s.input.rejected_size = 1;
+  s.rejected = 5;
+  s.clock_jumps = 3;
+  EXPECT_EQ(mme::formatStats(s),
+            "accepted=120 rejected=5 occluded=7 rejected_time=2 rejected_size=1 clock_jumps=3 "
+            "updates=0 markers_published=0");
+}
+
+TEST(EstimatorStats, LatencyFieldsOnceMarkersWereDrawn) {
+  mme::EstimatorStats s;
+  s.input.accepted = 1;
+  s.updates = 42;
+  s.latency.count = 9;
+  s.latency.kept = 9;
+  s.latency.p50_ms = 0.2114;
+  s.latency.p99_ms = 1.5;
+  EXPECT_EQ(mme::formatStats(s),
+            "accepted=1 rejected=0 occluded=0 rejected_time=0 rejected_size=0 clock_jumps=0 "
+            "updates=42 markers_published=9 latency_p50_ms=0.211 latency_p99_ms=1.500");
+}
+
+}  // namespace
