@@ -60,6 +60,12 @@ const char* inputTypeName(InputType type) {
   return "?";
 }
 
+/// [s] on the monotonic clock: update gaps must not follow wall-clock or sim-time jumps.
+double steadyNowS() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
 }  // namespace
 
 EstimatorNodeOptions readEstimatorOptions(const ros::NodeHandle& pnh) {
@@ -323,7 +329,7 @@ void EstimatorNode::onStatsTimer(const ros::WallTimerEvent&) {
   stats.input = estimator_->counters();
   stats.rejected = rejected_;
   stats.clock_jumps = clock_jumps_.jumps();
-  stats.updates = updates_;
+  stats.updates = update_stats_.summary(steadyNowS());
   stats.latency = latency_stats_.summary();
   std_msgs::String msg;
   msg.data = formatStats(stats);
@@ -339,7 +345,7 @@ void EstimatorNode::workerLoop() {
       ROS_ERROR_THROTTLE(5.0, "estimator_node: update failed: %s", e.what());
     }
     if (updated)
-      ++updates_;
+      update_stats_.onUpdate(steadyNowS());
     else
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
@@ -367,12 +373,12 @@ void EstimatorNode::bagLoop() {
     std::vector<uint8_t> occ(bag.occluded.begin() + t * n, bag.occluded.begin() + (t + 1) * n);
     ros::Time stamp;
     stamp.fromSec(bag.times_s[t]);
-    const uint64_t before = updates_;
+    const uint64_t before = update_stats_.updates();
     addObservation(stamp, "", bag.marker_names, std::move(x), std::move(occ),
                    std::chrono::steady_clock::now());
     if (options_.bag_rate == 0.0 && t + 1 >= options_.estimator.min_frames) {
       // As fast as the estimator keeps up: every window position gets one update.
-      while (updates_ == before && !stop_ && ros::ok())
+      while (update_stats_.updates() == before && !stop_ && ros::ok())
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
   }

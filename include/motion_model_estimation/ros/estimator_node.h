@@ -2,7 +2,7 @@
 // vicon_bridge/Markers, a bag), tf2 into ~fixed_frame, a worker thread running the
 // OnlineEstimator, ~estimate, ~markers, ~stats and the services. Domain logic lives in ROS-free
 // units: the estimator (identification/), marker-name mapping, the visualisation snapshot,
-// clock-jump and latency statistics and the ~stats line (live/).
+// clock-jump, update-gap and latency statistics and the ~stats line (live/).
 #pragma once
 
 #include <ros/ros.h>
@@ -28,6 +28,7 @@
 #include "motion_model_estimation/live/clock_jump_detector.h"
 #include "motion_model_estimation/live/latency_stats.h"
 #include "motion_model_estimation/live/marker_name_map.h"
+#include "motion_model_estimation/live/update_gap_stats.h"
 #include "motion_model_estimation/live/visualisation_snapshot.h"
 #include "motion_model_estimation/ros/marker_builder.h"
 
@@ -121,10 +122,10 @@ class EstimatorNode {
   std::chrono::steady_clock::time_point newest_arrival_;
   std::atomic<bool> stop_{false};
   std::atomic<uint64_t> rejected_{0};
-  std::atomic<uint64_t> updates_{0};
   std::atomic<uint32_t> last_published_generation_{0};  // timer and services: two threads
-  // Statistics (thread-safe units): arrival -> ~markers latency, clock jumps.
+  // Statistics (thread-safe units): arrival -> ~markers latency, gaps between updates, jumps.
   LatencyStats latency_stats_;
+  UpdateGapStats update_stats_;
   ClockJumpDetector clock_jumps_;
   // The input path (names_ -> estimator -> clock_jumps_) against ~load_model's replacement.
   std::mutex input_mutex_;
