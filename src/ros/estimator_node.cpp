@@ -12,13 +12,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "motion_model_estimation/ModelEstimate.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/io/model_yaml.h"
 #include "motion_model_estimation/io/path_confinement.h"
+#include "motion_model_estimation/live/estimator_stats.h"
 #include "motion_model_estimation/ros/bag_io.h"
-#include "motion_model_estimation/ros/marker_builder.h"
 #include "motion_model_estimation/ros/names.h"
 #include "motion_model_estimation/ros/param_utils.h"
 #include "motion_model_estimation/ros/vicon_markers.h"
@@ -37,15 +38,44 @@ void require(bool ok, const std::string& message) {
   if (!ok) throw InputError(message);
 }
 
+bool parseInputType(const std::string& text, InputType* type) {
+  if (text == "markers") {
+    *type = InputType::kMarkers;
+  } else if (text == "pointcloud") {
+    *type = InputType::kPointCloud;
+  } else if (text == "vicon") {
+    *type = InputType::kVicon;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+const char* inputTypeName(InputType type) {
+  switch (type) {
+    case InputType::kMarkers: return "markers";
+    case InputType::kPointCloud: return "pointcloud";
+    case InputType::kVicon: return "vicon";
+  }
+  return "?";
+}
+
+/// [s] on the monotonic clock: update gaps must not follow wall-clock or sim-time jumps.
+double steadyNowS() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
 }  // namespace
 
 EstimatorNodeOptions readEstimatorOptions(const ros::NodeHandle& pnh) {
   EstimatorNodeOptions o;
   read(pnh, "model", &o.model_path);
   require(!o.model_path.empty(), "~model is required (path to a model file)");
-  read(pnh, "input_type", &o.input_type);
-  require(o.input_type == "markers" || o.input_type == "pointcloud" || o.input_type == "vicon",
-          "~input_type must be markers, pointcloud or vicon, got '" + o.input_type + "'");
+  std::string input_type = inputTypeName(o.input_type);
+  read(pnh, "input_type", &input_type);
+  require(parseInputType(input_type, &o.input_type),
+          "~input_type must be markers, pointcloud or vicon, got '" + input_type + "'");
   read(pnh, "bag", &o.bag);
   read(pnh, "bag_topic", &o.bag_topic);
   read(pnh, "bag_rate", &o.bag_rate);
@@ -55,8 +85,9 @@ EstimatorNodeOptions readEstimatorOptions(const ros::NodeHandle& pnh) {
   require(o.update_rate_hz > 0.0 && o.update_rate_hz <= 1000.0,
           "~update_rate_hz must be in (0, 1000]");
   read(pnh, "publish_markers", &o.publish_markers);
-  read(pnh, "color_bonds_by", &o.color_bonds_by);
-  require(o.color_bonds_by == "strain" || o.color_bonds_by == "local_cost",
+  std::string color_bonds_by = bondColouringName(o.color_bonds_by);
+  read(pnh, "color_bonds_by", &color_bonds_by);
+  require(parseBondColouring(color_bonds_by, &o.color_bonds_by),
           "~color_bonds_by must be strain or local_cost");
   read(pnh, "particle_diameter_m", &o.particle_diameter_m);
   require(o.particle_diameter_m > 0.0, "~particle_diameter_m must be > 0");
@@ -145,7 +176,10 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
     if (autosave_target_.empty()) throw InputError("~autosave_path: " + error);
   }
   estimator_ = std::make_unique<OnlineEstimator>(model, estimator_options);
+  names_.setParticles(estimator_->particleNames());
   fixed_frame_ = options_.fixed_frame.empty() ? model.frame_id : options_.fixed_frame;
+  marker_style_.frame_id = fixed_frame_;
+  marker_style_.particle_diameter_m = options_.particle_diameter_m;
   estimate_pub_ = pnh_.advertise<motion_model_estimation::ModelEstimate>(names::kEstimate, 10);
   markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>(names::kVisualization, 2);
   stats_pub_ = pnh_.advertise<std_msgs::String>("stats", 1, true);  // latched, 1 Hz
@@ -153,12 +187,17 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
   export_srv_ = pnh_.advertiseService(names::kExportModel, &EstimatorNode::onExport, this);
   load_srv_ = pnh_.advertiseService(names::kLoadModel, &EstimatorNode::onLoad, this);
   if (options_.bag.empty()) {
-    if (options_.input_type == "markers")
-      input_sub_ = nh_.subscribe(names::kMarkersIn, 200, &EstimatorNode::onMarkerFrame, this);
-    else if (options_.input_type == "pointcloud")
-      input_sub_ = nh_.subscribe(names::kMarkersIn, 200, &EstimatorNode::onPointCloud, this);
-    else
-      input_sub_ = nh_.subscribe(names::kMarkersIn, 200, &EstimatorNode::onVicon, this);
+    switch (options_.input_type) {
+      case InputType::kMarkers:
+        input_sub_ = nh_.subscribe(names::kMarkersIn, 200, &EstimatorNode::onMarkerFrame, this);
+        break;
+      case InputType::kPointCloud:
+        input_sub_ = nh_.subscribe(names::kMarkersIn, 200, &EstimatorNode::onPointCloud, this);
+        break;
+      case InputType::kVicon:
+        input_sub_ = nh_.subscribe(names::kMarkersIn, 200, &EstimatorNode::onVicon, this);
+        break;
+    }
   }
   publish_timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / options_.update_rate_hz),
                                        &EstimatorNode::onPublishTimer, this);
@@ -169,7 +208,7 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
   ROS_INFO("estimator_node: %zu particles, %zu free parameters, window %d frames, population %d, "
            "input %s%s", model.particles.size(), freeParameters(model).size(),
            options_.estimator.window_frames, options_.estimator.es.population,
-           options_.bag.empty() ? options_.input_type.c_str() : "bag ",
+           options_.bag.empty() ? inputTypeName(options_.input_type) : "bag ",
            options_.bag.c_str());
 }
 
@@ -191,7 +230,7 @@ void EstimatorNode::onMarkerFrame(const motion_model_estimation::MarkerFrame::Co
   const auto arrival = std::chrono::steady_clock::now();
   if (msg->names.size() != msg->positions.size() ||
       (!msg->occluded.empty() && msg->occluded.size() != msg->positions.size())) {
-    reject("names, positions and occluded differ in length");
+    reject(MarkerNameMap::kLengthsDiffer);
     return;
   }
   std::vector<Eigen::Vector3d> x(msg->positions.size());
@@ -272,61 +311,29 @@ void EstimatorNode::addObservation(const ros::Time& stamp, const std::string& fr
         Eigen::Translation3d(t.x, t.y, t.z) * Eigen::Quaterniond(q.w, q.x, q.y, q.z);
     for (Eigen::Vector3d& x : positions_m) x = pose * x;
   }
-  // Map input order to the model's particle order.
-  std::vector<Eigen::Vector3d> x;
-  std::vector<uint8_t> mask;
-  if (names.empty()) {
-    x = std::move(positions_m);
-    mask = std::move(occluded);
-  } else {
-    std::lock_guard<std::mutex> lock(names_mutex_);
-    const std::vector<std::string> particles = estimator_->particleNames();
-    if (names != cached_names_) {
-      cached_names_ = names;
-      cached_index_.assign(names.size(), -1);
-      std::unordered_map<std::string, int> index;
-      for (size_t i = 0; i < particles.size(); ++i) index[particles[i]] = static_cast<int>(i);
-      size_t unknown = 0;
-      for (size_t k = 0; k < names.size(); ++k) {
-        auto it = index.find(names[k]);
-        if (it != index.end()) cached_index_[k] = it->second; else ++unknown;
-      }
-      if (unknown > 0)
-        ROS_WARN("estimator_node: %zu marker names in the input are not model particles "
-                 "(ignored), e.g. '%s'", unknown,
-                 names[std::find(cached_index_.begin(), cached_index_.end(), -1) -
-                       cached_index_.begin()].c_str());
-    }
-    x.assign(particles.size(), Eigen::Vector3d::Zero());
-    mask.assign(particles.size(), 1);  // particles absent from the frame are occluded
-    size_t matched = 0;
-    for (size_t k = 0; k < names.size(); ++k) {
-      const int i = cached_index_[k];
-      if (i < 0) continue;
-      x[i] = positions_m[k];
-      mask[i] = occluded[k];
-      ++matched;
-    }
-    if (matched == 0) {
-      reject("no marker name matches a model particle");
+  {
+    // Held through addFrame: a model loaded meanwhile cannot slip between the mapping, the
+    // frame and the clock-jump bookkeeping.
+    std::lock_guard<std::mutex> lock(input_mutex_);
+    // Map input order to the model's particle order.
+    const MappedFrame frame = names_.map(names, std::move(positions_m), std::move(occluded));
+    if (!frame.warning.empty()) ROS_WARN("estimator_node: %s", frame.warning.c_str());
+    if (!frame.rejection.empty()) {
+      reject(frame.rejection);
       return;
     }
+    const double time_s = stamp.toSec();
+    const std::string why = estimator_->addFrame(time_s, frame.positions_m, frame.occluded);
+    if (!why.empty()) {
+      reject(why);
+      return;
+    }
+    if (const std::optional<double> jump_s = clock_jumps_.onAcceptedFrame(time_s)) {
+      // OnlineEstimator::addFrame started a new window (the identified model lives on).
+      ROS_WARN_THROTTLE(5.0, "estimator_node: %s",
+                        ClockJumpDetector::warning(*jump_s, clock_jumps_.jumps()).c_str());
+    }
   }
-  const double previous_s = last_frame_time_s_;
-  const std::string why = estimator_->addFrame(stamp.toSec(), x, mask);
-  if (!why.empty()) {
-    reject(why);
-    return;
-  }
-  if (previous_s > -1e300 && std::fabs(stamp.toSec() - previous_s) > 1.0) {
-    // OnlineEstimator::addFrame started a new window (the identified model lives on).
-    ++clock_jumps_;
-    ROS_WARN_THROTTLE(5.0, "estimator_node: input clock jumped by %.3f s (looping bag, "
-                      "restarted capture or a pause): the window restarts (%llu jumps so far)",
-                      stamp.toSec() - previous_s,
-                      static_cast<unsigned long long>(clock_jumps_.load()));
-  }
-  last_frame_time_s_ = stamp.toSec();
   {
     std::lock_guard<std::mutex> lock(markers_mutex_);
     ++frames_accepted_seq_;
@@ -336,34 +343,14 @@ void EstimatorNode::addObservation(const ros::Time& stamp, const std::string& fr
 }
 
 void EstimatorNode::onStatsTimer(const ros::WallTimerEvent&) {
-  const InputCounters c = estimator_->counters();
+  EstimatorStats stats;
+  stats.input = estimator_->counters();
+  stats.rejected = rejected_;
+  stats.clock_jumps = clock_jumps_.jumps();
+  stats.updates = update_stats_.summary(steadyNowS());
+  stats.latency = latency_stats_.summary();
   std_msgs::String msg;
-  msg.data = "accepted=" + std::to_string(c.accepted) + " rejected=" +
-             std::to_string(rejected_.load()) + " occluded=" + std::to_string(c.occluded_samples) +
-             " rejected_time=" + std::to_string(c.rejected_time) + " rejected_size=" +
-             std::to_string(c.rejected_size) + " clock_jumps=" + std::to_string(clock_jumps_.load()) +
-             " updates=" + std::to_string(updates_.load());
-  std::vector<double> latencies;
-  uint64_t markers_published = 0;
-  {
-    std::lock_guard<std::mutex> lock(markers_mutex_);
-    latencies.assign(latencies_ms_.begin(), latencies_ms_.end());
-    markers_published = markers_published_;
-  }
-  msg.data += " markers_published=" + std::to_string(markers_published);
-  if (!latencies.empty()) {
-    // Nearest-rank percentiles of the last 1024 frame -> ~markers latencies.
-    auto percentile = [&](double q) {
-      const size_t k = std::min(latencies.size() - 1,
-                                static_cast<size_t>(std::ceil(q * latencies.size())) - 1);
-      std::nth_element(latencies.begin(), latencies.begin() + k, latencies.end());
-      return latencies[k];
-    };
-    char text[96];
-    std::snprintf(text, sizeof(text), " latency_p50_ms=%.3f latency_p99_ms=%.3f", percentile(0.5),
-                  percentile(0.99));
-    msg.data += text;
-  }
+  msg.data = formatStats(stats);
   stats_pub_.publish(msg);
 }
 
@@ -376,7 +363,7 @@ void EstimatorNode::workerLoop() {
       ROS_ERROR_THROTTLE(5.0, "estimator_node: update failed: %s", e.what());
     }
     if (updated)
-      ++updates_;
+      update_stats_.onUpdate(steadyNowS());
     else
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
@@ -404,12 +391,12 @@ void EstimatorNode::bagLoop() {
     std::vector<uint8_t> occ(bag.occluded.begin() + t * n, bag.occluded.begin() + (t + 1) * n);
     ros::Time stamp;
     stamp.fromSec(bag.times_s[t]);
-    const uint64_t before = updates_;
+    const uint64_t before = update_stats_.updates();
     addObservation(stamp, "", bag.marker_names, std::move(x), std::move(occ),
                    std::chrono::steady_clock::now());
     if (options_.bag_rate == 0.0 && t + 1 >= options_.estimator.min_frames) {
       // As fast as the estimator keeps up: every window position gets one update.
-      while (updates_ == before && !stop_ && ros::ok())
+      while (update_stats_.updates() == before && !stop_ && ros::ok())
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
   }
@@ -466,78 +453,18 @@ void EstimatorNode::markersLoop() {
     if (!e.valid) continue;
     if (!publishMarkers(e)) continue;
     if (!new_frame) continue;
-    const double latency_ms =
+    latency_stats_.add(
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - arrival)
-            .count();
-    std::lock_guard<std::mutex> lock(markers_mutex_);
-    ++markers_published_;
-    latencies_ms_.push_back(latency_ms);
-    if (latencies_ms_.size() > 1024) latencies_ms_.pop_front();
+            .count());
   }
 }
 
 bool EstimatorNode::publishMarkers(const Estimate& e) {
   const Trajectory window = estimator_->window();
-  const int frames = window.numFrames();
-  if (frames < 2) return false;
-  const Model model = estimator_->currentModel();
-  const int n = window.numMarkers();
-  MarkerScene scene;
-  scene.frame_id = fixed_frame_;
-  scene.stamp.fromSec(window.times_s.back());
-  scene.particle_diameter_m = options_.particle_diameter_m;
-  for (int i = 0; i < n; ++i) {
-    scene.observed.push_back(window.position(frames - 1, i));
-    scene.observed_occluded.push_back(window.isOccluded(frames - 1, i));
-  }
-  if (frames >= 3) {
-    // One-step prediction of the latest frame from the two before it.
-    Trajectory last3 = window;
-    const int first = frames - 3;
-    last3.times_s.assign(window.times_s.begin() + first, window.times_s.end());
-    last3.frame_numbers.assign(window.frame_numbers.begin() + first, window.frame_numbers.end());
-    last3.positions_m.assign(window.positions_m.begin() + first * n, window.positions_m.end());
-    last3.occluded.assign(window.occluded.begin() + first * n, window.occluded.end());
-    const Trajectory pred = OnlineEstimator::rollout(model, last3, 2);
-    if (pred.numFrames() == 2)
-      for (int i = 0; i < n; ++i) scene.predicted.push_back(pred.position(1, i));
-  }
-  // The long reconstruction from the window start (the paper's Fig. 2).
-  const Trajectory recon = OnlineEstimator::rollout(model, window, frames - 1);
-  if (recon.numFrames() == frames - 1) {
-    scene.reconstruction_trails.assign(n, {});
-    for (int i = 0; i < n; ++i) {
-      scene.reconstructed.push_back(recon.position(frames - 2, i));
-      for (int t = 0; t < recon.numFrames(); ++t)
-        scene.reconstruction_trails[i].push_back(recon.position(t, i));
-    }
-  }
-  double max_local = 0.0;
-  for (double c : e.local_costs) max_local = std::max(max_local, c);
-  for (const Bond& b : model.bonds) {
-    const BondType& type = model.bond_types[b.type];
-    if (type.kind != BondKind::kSpring) continue;
-    const int i = b.particles[0], j = b.particles[1];
-    scene.bonds.emplace_back(i, j);
-    if (options_.color_bonds_by == "strain") {
-      const double rest = type.value(kRestLength);
-      const double len = (scene.observed[j] - scene.observed[i]).norm();
-      scene.bond_values.push_back(rest > 0 ? len / rest - 1.0 : 0.0);
-    } else {
-      const double c = i < static_cast<int>(e.local_costs.size()) && j < static_cast<int>(e.local_costs.size())
-                           ? 0.5 * (e.local_costs[i] + e.local_costs[j]) : 0.0;
-      scene.bond_values.push_back(c);
-    }
-  }
-  if (options_.color_bonds_by == "local_cost") {
-    scene.bond_value_lo = 0.0;
-    scene.bond_value_hi = max_local > 0 ? max_local : 1.0;
-  }
-  char text[160];
-  std::snprintf(text, sizeof(text), "generation %u  cost %.3g m^2  %s", e.generation,
-                e.global_cost, e.stable ? "stable" : "UNSTABLE");
-  scene.text = text;
-  markers_pub_.publish(buildMarkers(scene));
+  const std::optional<VisualisationSnapshot> snapshot = makeVisualisationSnapshot(
+      estimator_->currentModel(), window, e, options_.color_bonds_by);
+  if (!snapshot) return false;
+  markers_pub_.publish(buildMarkers(*snapshot, marker_style_));
   return true;
 }
 
@@ -608,10 +535,14 @@ bool EstimatorNode::onLoad(motion_model_estimation::LoadModel::Request& req,
     std::string error;
     const std::string source = confinePath(options_.model_dir, req.path, false, &error);
     if (source.empty()) throw InputError("load refused: " + error);
-    estimator_->replaceModel(loadModelFile(source));
+    const Model model = loadModelFile(source);
     {
-      std::lock_guard<std::mutex> lock(names_mutex_);
-      cached_names_.clear();
+      std::lock_guard<std::mutex> lock(input_mutex_);
+      const std::vector<std::string> particles_before = estimator_->particleNames();
+      estimator_->replaceModel(model);
+      const std::vector<std::string> particles = estimator_->particleNames();
+      if (particles != particles_before) clock_jumps_.forgetWindow();  // the window was emptied
+      names_.setParticles(particles);
     }
     last_published_generation_ = 0;
     res.success = true;

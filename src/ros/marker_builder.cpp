@@ -6,10 +6,10 @@ namespace mme {
 
 namespace {
 
-visualization_msgs::Marker base(const MarkerScene& s, const char* ns, int id, int type) {
+visualization_msgs::Marker base(const std_msgs::Header& header, const char* ns, int id,
+                                int type) {
   visualization_msgs::Marker m;
-  m.header.frame_id = s.frame_id;
-  m.header.stamp = s.stamp;
+  m.header = header;
   m.ns = ns;
   m.id = id;
   m.type = type;
@@ -49,12 +49,16 @@ std_msgs::ColorRGBA diverging(double v, double lo, double hi) {
 
 }  // namespace
 
-visualization_msgs::MarkerArray buildMarkers(const MarkerScene& s) {
+visualization_msgs::MarkerArray buildMarkers(const VisualisationSnapshot& s,
+                                             const MarkerStyle& style) {
   using visualization_msgs::Marker;
   visualization_msgs::MarkerArray out;
-  const double d = s.particle_diameter_m;
+  const double d = style.particle_diameter_m;
+  std_msgs::Header header;
+  header.frame_id = style.frame_id;
+  header.stamp.fromSec(s.stamp_s);
 
-  Marker observed = base(s, "observed", 0, Marker::SPHERE_LIST);
+  Marker observed = base(header, "observed", 0, Marker::SPHERE_LIST);
   observed.scale.x = observed.scale.y = observed.scale.z = d;
   observed.color = rgba(0.1f, 0.8f, 0.1f, 1.0f);
   for (size_t i = 0; i < s.observed.size(); ++i)
@@ -62,19 +66,19 @@ visualization_msgs::MarkerArray buildMarkers(const MarkerScene& s) {
       observed.points.push_back(toPoint(s.observed[i]));
   out.markers.push_back(observed);
 
-  Marker predicted = base(s, "predicted", 0, Marker::SPHERE_LIST);
+  Marker predicted = base(header, "predicted", 0, Marker::SPHERE_LIST);
   predicted.scale.x = predicted.scale.y = predicted.scale.z = 0.7 * d;
   predicted.color = rgba(1.0f, 0.6f, 0.0f, 0.9f);
   for (const Eigen::Vector3d& x : s.predicted) predicted.points.push_back(toPoint(x));
   out.markers.push_back(predicted);
 
-  Marker recon = base(s, "reconstruction", 0, Marker::SPHERE_LIST);
+  Marker recon = base(header, "reconstruction", 0, Marker::SPHERE_LIST);
   recon.scale.x = recon.scale.y = recon.scale.z = 0.7 * d;
   recon.color = rgba(0.2f, 0.4f, 1.0f, 0.9f);
   for (const Eigen::Vector3d& x : s.reconstructed) recon.points.push_back(toPoint(x));
   out.markers.push_back(recon);
 
-  Marker trails = base(s, "reconstruction", 1, Marker::LINE_LIST);
+  Marker trails = base(header, "reconstruction", 1, Marker::LINE_LIST);
   trails.scale.x = 0.15 * d;
   trails.color = rgba(0.2f, 0.4f, 1.0f, 0.4f);
   for (const auto& path : s.reconstruction_trails)
@@ -84,7 +88,7 @@ visualization_msgs::MarkerArray buildMarkers(const MarkerScene& s) {
     }
   out.markers.push_back(trails);
 
-  Marker bonds = base(s, "bonds", 0, Marker::LINE_LIST);
+  Marker bonds = base(header, "bonds", 0, Marker::LINE_LIST);
   bonds.scale.x = 0.2 * d;
   bonds.color = rgba(1.0f, 1.0f, 1.0f, 1.0f);
   for (size_t b = 0; b < s.bonds.size(); ++b) {
@@ -105,7 +109,7 @@ visualization_msgs::MarkerArray buildMarkers(const MarkerScene& s) {
   }
   out.markers.push_back(bonds);
 
-  Marker text = base(s, "status", 0, Marker::TEXT_VIEW_FACING);
+  Marker text = base(header, "status", 0, Marker::TEXT_VIEW_FACING);
   text.scale.z = 2.0 * d;
   text.color = rgba(1.0f, 1.0f, 1.0f, 1.0f);
   text.text = s.text;

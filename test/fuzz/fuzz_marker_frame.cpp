@@ -12,12 +12,12 @@
 #include <cstdlib>
 #include <cstring>
 #include <string>
-#include <unordered_map>
 
 #include "motion_model_estimation/MarkerFrame.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/identification/online_estimator.h"
 #include "motion_model_estimation/io/model_yaml.h"
+#include "motion_model_estimation/live/marker_name_map.h"
 #include "motion_model_estimation/ros/conversions.h"
 
 namespace {
@@ -104,7 +104,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
   }
 
-  // 2. The node's path: names -> model order (absent = occluded), then the estimator.
+  // 2. The node's path: names -> model order (absent = occluded, MarkerNameMap), then the
+  //    estimator.
   mme::OnlineEstimatorOptions options;
   options.window_frames = 6;
   options.min_frames = 3;
@@ -113,21 +114,23 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   options.es.offspring = 4;
   options.es.refine_period = 0;
   mme::OnlineEstimator estimator(m, options);
-  const bool lengths_ok = msg.names.size() == msg.positions.size() &&
-                          (msg.occluded.empty() || msg.occluded.size() == msg.positions.size());
-  std::vector<Eigen::Vector3d> x(particle_names.size(), Eigen::Vector3d::Zero());
-  std::vector<uint8_t> mask(particle_names.size(), 1);
-  if (lengths_ok) {
-    std::unordered_map<std::string, int> index;
-    for (size_t i = 0; i < particle_names.size(); ++i) index[particle_names[i]] = int(i);
-    for (size_t k = 0; k < msg.names.size(); ++k) {
-      auto it = index.find(msg.names[k]);
-      if (it == index.end()) continue;
-      const auto& p = msg.positions[k];
-      x[it->second] = Eigen::Vector3d(p.x, p.y, p.z);
-      mask[it->second] = !msg.occluded.empty() && msg.occluded[k];
-    }
+  std::vector<Eigen::Vector3d> positions;
+  for (const auto& p : msg.positions) positions.emplace_back(p.x, p.y, p.z);
+  mme::MarkerNameMap names(particle_names);
+  mme::MappedFrame mapped = names.map(msg.names, positions, msg.occluded);
+  if (!mapped.rejection.empty() || msg.names.empty()) {
+    // Refused (the node skips it) or in model order of the wrong size: go on with a frame
+    // of the model's size, every particle occluded, to exercise the estimator anyway.
+    mapped.positions_m.assign(particle_names.size(), Eigen::Vector3d::Zero());
+    mapped.occluded.assign(particle_names.size(), 1);
+  } else if (mapped.positions_m.size() != particle_names.size() ||
+             mapped.occluded.size() != particle_names.size() ||
+             mapped.matched + mapped.unknown != msg.names.size()) {
+    std::fprintf(stderr, "MarkerNameMap made an inconsistent frame\n");
+    std::abort();
   }
+  const std::vector<Eigen::Vector3d>& x = mapped.positions_m;
+  const std::vector<uint8_t>& mask = mapped.occluded;
   const double t0 = msg.header.stamp.toSec();
   for (int k = 0; k < 5; ++k) {
     std::vector<Eigen::Vector3d> xk = x;
@@ -136,10 +139,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     (void)estimator.addFrame(t0 + 0.01 * k, xk, mask);  // duplicate: rejected
   }
   // Raw positions in message order (wrong size unless it happens to match).
-  std::vector<Eigen::Vector3d> raw;
-  for (const auto& p : msg.positions) raw.emplace_back(p.x, p.y, p.z);
   std::vector<uint8_t> raw_occ(msg.occluded.begin(), msg.occluded.end());
-  (void)estimator.addFrame(t0 + 1.0, raw, raw_occ);
+  (void)estimator.addFrame(t0 + 1.0, positions, raw_occ);
   try {
     estimator.update();
   } catch (const mme::InputError&) {

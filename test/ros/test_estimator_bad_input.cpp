@@ -6,8 +6,9 @@
 //   unknown marker names only           rejected by the node
 //   time going backwards (50 ms)        rejected by the estimator (rejected_time)
 //   a duplicated frame (same message)   rejected by the estimator (rejected_time)
-// Pass: the counters of ~stats match exactly what was sent, ~estimate keeps coming afterwards
-// and still converges to the truth (1 %): masked NaNs do not poison the window.
+// Pass: the counters of ~stats match exactly what was sent (and the update-gap fields are
+// there), ~estimate keeps coming afterwards and still converges to the truth (1 %): masked
+// NaNs do not poison the window.
 #include <cstdio>
 #include <limits>
 #include <map>
@@ -158,6 +159,13 @@ TEST(EstimatorNode, SurvivesAndCountsBadInput) {
   EXPECT_EQ(s["rejected_size"], 0);  // unequal arrays are caught before the estimator
   EXPECT_EQ(s["occluded"], nan_samples);
   EXPECT_EQ(s["clock_jumps"], 0);
+  // Estimates were updated: the gaps between updates are reported, the run's longest at least
+  // the last 10 s's, and the worker never stood still for 10 s.
+  EXPECT_GT(s["updates"], 0);
+  ASSERT_EQ(s.count("max_update_gap_ms"), 1u);
+  ASSERT_EQ(s.count("max_update_gap_10s_ms"), 1u);
+  EXPECT_GE(s["max_update_gap_ms"], s["max_update_gap_10s_ms"]);
+  EXPECT_LT(s["max_update_gap_ms"], 10000);
   std::printf("[ INFO     ] stats after the bad input: accepted=%lld rejected=%lld "
               "rejected_time=%lld occluded=%lld\n", s["accepted"], s["rejected"],
               s["rejected_time"], s["occluded"]);

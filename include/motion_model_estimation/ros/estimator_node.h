@@ -1,6 +1,8 @@
 // The online estimator's ROS wiring (SPEC section 6): inputs (MarkerFrame, PointCloud2,
 // vicon_bridge/Markers, a bag), tf2 into ~fixed_frame, a worker thread running the
-// OnlineEstimator, ~estimate, ~markers and the services. Domain logic lives in the core.
+// OnlineEstimator, ~estimate, ~markers, ~stats and the services. Domain logic lives in ROS-free
+// units: the estimator (identification/), marker-name mapping, the visualisation snapshot,
+// clock-jump, update-gap and latency statistics and the ~stats line (live/).
 #pragma once
 
 #include <ros/ros.h>
@@ -13,32 +15,43 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
-#include <deque>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
-#include <unordered_map>
 #include <vector>
 
 #include "motion_model_estimation/ExportModel.h"
 #include "motion_model_estimation/LoadModel.h"
 #include "motion_model_estimation/MarkerFrame.h"
 #include "motion_model_estimation/identification/online_estimator.h"
+#include "motion_model_estimation/live/clock_jump_detector.h"
+#include "motion_model_estimation/live/latency_stats.h"
+#include "motion_model_estimation/live/marker_name_map.h"
+#include "motion_model_estimation/live/update_gap_stats.h"
+#include "motion_model_estimation/live/visualisation_snapshot.h"
+#include "motion_model_estimation/ros/marker_builder.h"
 
 namespace mme {
+
+/// What arrives on `markers` (~input_type).
+enum class InputType {
+  kMarkers,     ///< motion_model_estimation/MarkerFrame
+  kPointCloud,  ///< sensor_msgs/PointCloud2, points in particle order, NaN = occluded
+  kVicon,       ///< vicon_bridge/Markers (millimetres), received as a ShapeShifter
+};
 
 /// ROS-side options (see config/estimator.yaml for meaning, units and defaults).
 struct EstimatorNodeOptions {
   std::string model_path;
-  std::string input_type = "markers";  ///< markers | pointcloud | vicon
+  InputType input_type = InputType::kMarkers;
   std::string bag;                     ///< read this bag instead of subscribing
   std::string bag_topic;               ///< MarkerFrame topic in the bag ("" = the only one)
   double bag_rate = 0.0;               ///< x real time; 0 = as fast as the estimator keeps up
   std::string fixed_frame;             ///< "" = the model's frame_id
   double update_rate_hz = 20.0;        ///< [Hz] most ~estimate messages per second
   bool publish_markers = true;
-  std::string color_bonds_by = "strain";  ///< strain | local_cost
+  BondColouring color_bonds_by = BondColouring::kStrain;
   double particle_diameter_m = 0.02;
   double tf_timeout_sec = 0.05;
   bool vicon_qualify_with_subject = false;  ///< names "subject/marker" for vicon input
@@ -80,7 +93,7 @@ class EstimatorNode {
   void markersLoop();
   bool publishMarkers(const Estimate& estimate);  ///< false: nothing to show yet
   void onAutosaveTimer(const ros::WallTimerEvent&);
-  void onStatsTimer(const ros::WallTimerEvent&);  ///< ~stats: input counters (std_msgs/String)
+  void onStatsTimer(const ros::WallTimerEvent&);  ///< ~stats (std_msgs/String, formatStats)
   std::string exportYaml(const Estimate& estimate) const;
   bool onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
   bool onExport(motion_model_estimation::ExportModel::Request& req,
@@ -92,6 +105,7 @@ class EstimatorNode {
   EstimatorNodeOptions options_;
   std::unique_ptr<OnlineEstimator> estimator_;
   std::string fixed_frame_;
+  MarkerStyle marker_style_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   ros::Subscriber input_sub_;
@@ -106,17 +120,16 @@ class EstimatorNode {
   uint64_t frames_accepted_seq_ = 0, frames_rendered_seq_ = 0;
   bool markers_estimate_changed_ = false;
   std::chrono::steady_clock::time_point newest_arrival_;
-  std::deque<double> latencies_ms_;  // the last 1024 arrival -> ~markers latencies
-  uint64_t markers_published_ = 0;
   std::atomic<bool> stop_{false};
   std::atomic<uint64_t> rejected_{0};
-  std::atomic<uint64_t> updates_{0};
-  std::atomic<uint64_t> clock_jumps_{0};  // frames > 1 s from the previous one: new window
-  std::atomic<double> last_frame_time_s_{-1e300};
   std::atomic<uint32_t> last_published_generation_{0};  // timer and services: two threads
-  std::mutex names_mutex_;
-  std::vector<std::string> cached_names_;
-  std::vector<int> cached_index_;  // input position -> particle index (-1 = unknown marker)
+  // Statistics (thread-safe units): arrival -> ~markers latency, gaps between updates, jumps.
+  LatencyStats latency_stats_;
+  UpdateGapStats update_stats_;
+  ClockJumpDetector clock_jumps_;
+  // The input path (names_ -> estimator -> clock_jumps_) against ~load_model's replacement.
+  std::mutex input_mutex_;
+  MarkerNameMap names_;
 };
 
 }  // namespace mme

@@ -1,0 +1,28 @@
+// The live node's ~stats line: its input ledger, clock jumps, updates and their gaps, and the
+// arrival -> ~markers latency, as "key=value" fields separated by spaces (scripts and the soak
+// driver parse them by key). No ROS here.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "motion_model_estimation/identification/online_estimator.h"
+#include "motion_model_estimation/live/latency_stats.h"
+#include "motion_model_estimation/live/update_gap_stats.h"
+
+namespace mme {
+
+struct EstimatorStats {
+  InputCounters input;       ///< the estimator's counters (accepted, rejected_time, ...)
+  uint64_t rejected = 0;     ///< every frame the node skipped, whatever the reason
+  uint64_t clock_jumps = 0;  ///< frames that restarted the window
+  UpdateGapSummary updates;  ///< estimate updates and the gaps between them
+  LatencySummary latency;    ///< arrival -> ~markers of drawn frames
+};
+
+/// "accepted=N rejected=N occluded=N rejected_time=N rejected_size=N clock_jumps=N updates=N
+/// markers_published=N", then "latency_p50_ms=X latency_p99_ms=X" once markers were drawn, then
+/// "max_update_gap_ms=X max_update_gap_10s_ms=X" once an update happened (X with 3 decimals).
+std::string formatStats(const EstimatorStats& stats);
+
+}  // namespace mme

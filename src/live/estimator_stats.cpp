@@ -1,0 +1,30 @@
+#include "motion_model_estimation/live/estimator_stats.h"
+
+#include <cstdio>
+
+namespace mme {
+
+std::string formatStats(const EstimatorStats& s) {
+  std::string text =
+      "accepted=" + std::to_string(s.input.accepted) + " rejected=" + std::to_string(s.rejected) +
+      " occluded=" + std::to_string(s.input.occluded_samples) +
+      " rejected_time=" + std::to_string(s.input.rejected_time) +
+      " rejected_size=" + std::to_string(s.input.rejected_size) +
+      " clock_jumps=" + std::to_string(s.clock_jumps) +
+      " updates=" + std::to_string(s.updates.updates) +
+      " markers_published=" + std::to_string(s.latency.count);
+  char field[128];
+  if (s.latency.kept > 0) {
+    std::snprintf(field, sizeof(field), " latency_p50_ms=%.3f latency_p99_ms=%.3f",
+                  s.latency.p50_ms, s.latency.p99_ms);
+    text += field;
+  }
+  if (s.updates.updates > 0) {
+    std::snprintf(field, sizeof(field), " max_update_gap_ms=%.3f max_update_gap_10s_ms=%.3f",
+                  s.updates.max_gap_ms, s.updates.recent_max_gap_ms);
+    text += field;
+  }
+  return text;
+}
+
+}  // namespace mme
