@@ -10,6 +10,7 @@
 
 #include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/stiffness.h"
 #include "motion_model_estimation/identification/equation_error.h"
 #include "motion_model_estimation/identification/levenberg_marquardt.h"
 
@@ -89,6 +90,8 @@ constexpr double kAtBoundShare = 0.01;
 /// A default bound the answer reached moves this far out (a factor for log genes, ranges for
 /// linear ones).
 constexpr double kWidenFactor = 10.0;
+/// Most substeps per frame the stiff-scene rule asks for.
+constexpr int kMaxSubsteps = 64;
 
 std::string formatValue(double v) {
   char text[32];
@@ -163,19 +166,58 @@ const char* parameterFlagName(ParameterFlag flag) {
     case ParameterFlag::kNone: return "";
     case ParameterFlag::kAtLowerBound: return "at_lower_bound";
     case ParameterFlag::kAtUpperBound: return "at_upper_bound";
+    case ParameterFlag::kUnidentifiable: return "unidentifiable";
   }
   return "?";
 }
 
-IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
+bool parseCostChoice(const std::string& name, CostChoice* choice) {
+  if (name == "auto") *choice = CostChoice::kAuto;
+  else if (name == "short_term") *choice = CostChoice::kShortTerm;
+  else if (name == "output_error") *choice = CostChoice::kOutputError;
+  else return false;
+  return true;
+}
+
+const char* costChoiceName(CostChoice choice) {
+  switch (choice) {
+    case CostChoice::kAuto: return "auto";
+    case CostChoice::kShortTerm: return "short_term";
+    case CostChoice::kOutputError: return "output_error";
+  }
+  return "?";
+}
+
+namespace {
+
+/// The positions of the first frame where every particle is seen (else the model's) [m].
+std::vector<Eigen::Vector3d> referencePositions(const Model& model, const Trajectory& trajectory) {
+  const int n = static_cast<int>(model.particles.size());
+  for (int t = 0; t < trajectory.numFrames(); ++t) {
+    bool all = true;
+    for (int i = 0; i < n && all; ++i) all = !trajectory.isOccluded(t, i);
+    if (!all) continue;
+    return std::vector<Eigen::Vector3d>(trajectory.positions_m.begin() + t * n,
+                                        trajectory.positions_m.begin() + (t + 1) * n);
+  }
+  std::vector<Eigen::Vector3d> x;
+  for (const Particle& p : model.particles) x.push_back(p.position_m);
+  return x;
+}
+
+}  // namespace
+
+IdentifyResult identifyModel(const Model& input_model, const Trajectory& trajectory,
                              const IdentifyOptions& options,
                              const std::function<void(const Progress&)>& progress) {
   const std::string bad = validateOptions(options);
   if (!bad.empty()) throw InputError(bad);
   const auto start = std::chrono::steady_clock::now();
+  Model model = input_model;
   auto cost = std::make_shared<ShortTermCost>(model, trajectory);
   if (cost->termCount() == 0)
     throw InputError("no usable (particle, frame) terms: too few frames or everything occluded");
+  if (!(model.frame_rate_hz > 0.0)) model.frame_rate_hz = trajectory.frame_rate_hz;
   ParameterSpace space(model, trajectory);
   std::vector<std::string> notes, seed_notes;
   std::vector<std::vector<double>> seeds;
@@ -195,116 +237,209 @@ IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
     progress(p);
   };
   for (const std::string& text : seed_notes) note(text, 0, 0);
-  // Convergence: the best cost no longer falls (relative 1e-9) or sits at the round-off floor.
-  const double floor_m2 = 1e-26 * static_cast<double>(cost->residualCount());
   IdentifyStop stop = IdentifyStop::kGenerations;
   int generations_done = 0;
   uint64_t evaluations_done = 0;
   int widenings = 0;
   std::unique_ptr<EvolutionStrategy> es;
-  while (true) {
-    // One search; when its answer ends on a default bound, the bound is widened and the search
-    // resumes from that answer (a bounded number of times).
-    es = std::make_unique<EvolutionStrategy>(space, options.es);
-    es->setCost(cost);
-    es->setSeeds(seeds);
-    if (options.max_wall_time_s > 0.0)
-      es->setDeadline(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                  std::chrono::duration<double>(options.max_wall_time_s)));
+
+  // The global search on the one-step cost: widening a default bound the refined best presses
+  // on and resuming from that best (a bounded number of times).
+  const auto search = [&]() {
     // Converged: over the last `patience` generations the best cost fell by less than a
     // relative 1e-6, or it sits at the round-off floor.
-    std::vector<double> best_after;  // per generation of this search
-    int refinements_seen = 0;
-    bool at_default_bound = false;
-    stop = IdentifyStop::kGenerations;
-    while (generations_done + es->generation() < options.generations) {
-      es->step();
-      const double best = es->best().cost;
-      best_after.push_back(best);
-      if (progress) {
-        Progress p;
-        p.generation = generations_done + es->generation();
-        p.evaluations = evaluations_done + es->evaluations();
-        p.best_cost = best;
-        p.wall_time_s = elapsed();
-        p.best_values = es->bestValues();
-        progress(p);
-      }
-      if (options.target_cost > 0.0 && best <= options.target_cost) {
-        stop = IdentifyStop::kTargetCost;
-        break;
-      }
-      if (options.max_wall_time_s > 0.0 && elapsed() >= options.max_wall_time_s) {
-        stop = IdentifyStop::kWallTime;
-        break;
-      }
-      if (es->refinements() != refinements_seen) {
-        // A refined best pressing on a default bound: the answer lies beyond it.
-        refinements_seen = es->refinements();
-        if (widenings < options.max_bound_widenings &&
-            !widenableAtBound(space, es->best().genes).empty()) {
-          at_default_bound = true;
+    const double floor_m2 = 1e-26 * static_cast<double>(cost->residualCount());
+    while (true) {
+      es = std::make_unique<EvolutionStrategy>(space, options.es);
+      es->setCost(cost);
+      es->setSeeds(seeds);
+      if (options.max_wall_time_s > 0.0)
+        es->setDeadline(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                    std::chrono::duration<double>(options.max_wall_time_s)));
+      std::vector<double> best_after;  // per generation of this search
+      int refinements_seen = 0;
+      bool at_default_bound = false;
+      stop = IdentifyStop::kGenerations;
+      while (generations_done + es->generation() < options.generations) {
+        es->step();
+        const double best = es->best().cost;
+        best_after.push_back(best);
+        if (progress) {
+          Progress p;
+          p.generation = generations_done + es->generation();
+          p.evaluations = evaluations_done + es->evaluations();
+          p.best_cost = best;
+          p.wall_time_s = elapsed();
+          p.best_values = es->bestValues();
+          progress(p);
+        }
+        if (options.target_cost > 0.0 && best <= options.target_cost) {
+          stop = IdentifyStop::kTargetCost;
+          break;
+        }
+        if (options.max_wall_time_s > 0.0 && elapsed() >= options.max_wall_time_s) {
+          stop = IdentifyStop::kWallTime;
+          break;
+        }
+        if (es->refinements() != refinements_seen) {
+          // A refined best pressing on a default bound: the answer lies beyond it.
+          refinements_seen = es->refinements();
+          if (widenings < options.max_bound_widenings &&
+              !widenableAtBound(space, es->best().genes).empty()) {
+            at_default_bound = true;
+            break;
+          }
+        }
+        const int patience = options.patience_generations;
+        const size_t g = best_after.size();
+        if (patience > 0 && es->refinements() > 0 &&
+            (best <= floor_m2 || (g > static_cast<size_t>(patience) &&
+                                  best_after[g - 1 - patience] - best <= 1e-6 * best_after[g - 1 - patience]))) {
+          stop = IdentifyStop::kConverged;
           break;
         }
       }
-      const int patience = options.patience_generations;
-      const size_t g = best_after.size();
-      if (patience > 0 && es->refinements() > 0 &&
-          (best <= floor_m2 || (g > static_cast<size_t>(patience) &&
-                                best_after[g - 1 - patience] - best <= 1e-6 * best_after[g - 1 - patience]))) {
-        stop = IdentifyStop::kConverged;
-        break;
+      generations_done += es->generation();
+      evaluations_done += es->evaluations();
+      if (stop == IdentifyStop::kTargetCost || stop == IdentifyStop::kWallTime ||
+          widenings >= options.max_bound_widenings || generations_done >= options.generations)
+        return;
+      if (!at_default_bound && widenableAtBound(space, es->best().genes).empty()) return;
+      const std::vector<double> best = es->best().genes;
+      for (const std::pair<size_t, int>& hit : widenableAtBound(space, best)) {
+        const size_t k = hit.first;
+        const int side = hit.second;
+        const Gene& g = space.gene(k);
+        const double step = g.log_scale ? std::log(kWidenFactor) : (kWidenFactor - 1.0) * (g.upper - g.lower);
+        const double lo = side < 0 ? g.lower - step : g.lower, hi = side > 0 ? g.upper + step : g.upper;
+        const double value = space.toPhysical(best)[k];
+        const std::string name = g.ref.name;
+        const bool log_scale = g.log_scale;
+        space.setBounds(k, lo, hi);
+        const Gene& wide = space.gene(k);
+        note("'" + name + "' ended at its default " + (side < 0 ? "lower" : "upper") +
+                 " search bound (" + formatValue(value) + "): bounds widened to [" +
+                 formatValue(log_scale ? std::exp(wide.lower) : wide.lower) + ", " +
+                 formatValue(log_scale ? std::exp(wide.upper) : wide.upper) + "], search resumed",
+             generations_done, evaluations_done);
+      }
+      ++widenings;
+      seeds.insert(seeds.begin(), best);
+    }
+  };
+  search();
+
+  // Stiff scenes: more substeps when the answer's stiffest mode is fast for the frame rate.
+  const std::vector<Eigen::Vector3d> reference = referencePositions(model, trajectory);
+  const double h = 1.0 / model.frame_rate_hz;
+  const auto omegaH = [&](const std::vector<double>& values) {
+    Model m = model;
+    setValues(m, space.refs(), values);
+    return stiffestModeRadPerS(m, reference) * h;
+  };
+  double omega_h = omegaH(es->bestValues());
+  if (options.max_omega_h_per_substep > 0.0 && stop != IdentifyStop::kWallTime &&
+      omega_h / model.substeps > options.max_omega_h_per_substep) {
+    const int needed = std::min(
+        kMaxSubsteps, static_cast<int>(std::ceil(omega_h / options.max_omega_h_per_substep)));
+    if (needed > model.substeps) {
+      note("the stiffest mode has omega*h = " + formatValue(omega_h) + " at " +
+               std::to_string(model.substeps) + " substep(s) per frame: the prediction now uses " +
+               std::to_string(needed) + " substeps per frame, search resumed",
+           generations_done, evaluations_done);
+      model.substeps = needed;
+      cost = std::make_shared<ShortTermCost>(model, trajectory);
+      seeds.insert(seeds.begin(), es->best().genes);
+      if (cost->termCount() > 0 && generations_done < options.generations) {
+        search();
+        omega_h = omegaH(es->bestValues());
       }
     }
-    generations_done += es->generation();
-    evaluations_done += es->evaluations();
-    if (stop == IdentifyStop::kTargetCost || stop == IdentifyStop::kWallTime ||
-        widenings >= options.max_bound_widenings || generations_done >= options.generations)
-      break;
-    if (!at_default_bound && widenableAtBound(space, es->best().genes).empty()) break;
-    const std::vector<double> best = es->best().genes;
-    bool widened = false;
-    for (const std::pair<size_t, int>& hit : widenableAtBound(space, best)) {
-      const size_t k = hit.first;
-      const int side = hit.second;
-      const Gene& g = space.gene(k);
-      const double step = g.log_scale ? std::log(kWidenFactor) : (kWidenFactor - 1.0) * (g.upper - g.lower);
-      const double lo = side < 0 ? g.lower - step : g.lower, hi = side > 0 ? g.upper + step : g.upper;
-      const double value = space.toPhysical(best)[k];
-      const std::string name = g.ref.name;
-      const bool log_scale = g.log_scale;
-      space.setBounds(k, lo, hi);
-      const Gene& wide = space.gene(k);
-      note("'" + name + "' ended at its default " + (side < 0 ? "lower" : "upper") +
-               " search bound (" + formatValue(value) + "): bounds widened to [" +
-               formatValue(log_scale ? std::exp(wide.lower) : wide.lower) + ", " +
-               formatValue(log_scale ? std::exp(wide.upper) : wide.upper) + "], search resumed",
-           generations_done, evaluations_done);
-      widened = true;
-    }
-    if (!widened) break;
-    ++widenings;
-    seeds.insert(seeds.begin(), best);
   }
+
   IdentifyResult r;
   r.parameters = space.refs();
   r.values = es->bestValues();
   r.global_cost = es->best().cost;
+  r.estimator = "short_term";
+  r.noise_estimate_m = estimateMarkerNoise(trajectory);
+  std::vector<double> best_genes = es->best().genes;
+  std::vector<uint8_t> unidentifiable(space.size(), 0);
+  std::vector<double> std_devs;
+  const bool output_error =
+      options.cost == CostChoice::kOutputError ||
+      (options.cost == CostChoice::kAuto && r.noise_estimate_m >= options.auto_noise_threshold_m);
+  if (output_error && stop != IdentifyStop::kWallTime) {
+    // From the search's answer and from the smoothed equation-error solutions (the one-step
+    // optimum is biased by noise, badly so at a millimetre); the lowest output-error cost wins.
+    std::vector<std::vector<double>> starts{best_genes};
+    for (int half_width : {3, 8}) {
+      EquationErrorOptions o;
+      o.smoothing_half_width = half_width;
+      const EquationErrorResult ee = solveEquationError(model, trajectory, o);
+      if (!ee.applicable) break;
+      std::vector<double> g = best_genes;
+      for (size_t k = 0; k < space.size(); ++k) {
+        const Gene& gene = space.gene(k);
+        const double v = ee.values[k];
+        if (!gene.smooth || gene.clamp_length || !std::isfinite(v) || (gene.log_scale && !(v > 0.0)))
+          continue;
+        g[k] = space.reflect(k, gene.log_scale ? std::log(v) : v);
+      }
+      starts.push_back(g);
+    }
+    OutputErrorResult best_oe;
+    for (const std::vector<double>& from : starts) {
+      OutputErrorOptions o = options.output_error;
+      o.threads = std::max(o.threads, options.es.threads);
+      if (options.max_wall_time_s > 0.0) {
+        const double left = options.max_wall_time_s - elapsed();
+        if (left <= 0.0) break;
+        o.max_time_s = o.max_time_s > 0.0 ? std::min(o.max_time_s, left) : left;
+      }
+      o.estimate_std = false;
+      const OutputErrorResult oe = estimateOutputError(model, trajectory, space, from, o);
+      if (oe.ran && (!best_oe.ran || oe.observation_cost_m2 < best_oe.observation_cost_m2)) best_oe = oe;
+      // A fit as good as the noise allows needs no other start.
+      if (best_oe.ran && best_oe.noise_std_m <= 1.2 * best_oe.noise_std_prior_m) break;
+    }
+    if (best_oe.ran) {
+      OutputErrorOptions o = options.output_error;
+      o.threads = std::max(o.threads, options.es.threads);
+      o.estimate_std = options.estimate_std;
+      o.max_iterations = 20;  // from its own optimum: the covariance, and any last steps
+      const OutputErrorResult oe = estimateOutputError(model, trajectory, space, best_oe.genes, o);
+      if (oe.ran && oe.observation_cost_m2 <= best_oe.observation_cost_m2 * (1.0 + 1e-9)) best_oe = oe;
+      best_genes = best_oe.genes;
+      r.values = best_oe.values;
+      r.global_cost = best_oe.observation_cost_m2;
+      r.noise_std_m = best_oe.noise_std_m;
+      r.estimator = "output_error";
+      std_devs = best_oe.std_devs;
+      unidentifiable = best_oe.unidentifiable;
+      omega_h = omegaH(r.values);
+    }
+  }
   r.generations = generations_done;
   r.evaluations = evaluations_done;
   r.frames = trajectory.numFrames();
   r.stop = stop;
   r.last_refine_status = es->lastRefineStatus();
   r.bound_widenings = widenings;
+  r.substeps = model.substeps;
+  r.stiffest_omega_h = omega_h;
   r.notes = notes;
   r.flags.assign(r.values.size(), ParameterFlag::kNone);
   for (size_t k = 0; k < space.size(); ++k) {
-    const int side = atBound(space.gene(k), es->best().genes[k]);
+    const int side = atBound(space.gene(k), best_genes[k]);
     if (side != 0) r.flags[k] = side < 0 ? ParameterFlag::kAtLowerBound : ParameterFlag::kAtUpperBound;
+    else if (unidentifiable[k]) r.flags[k] = ParameterFlag::kUnidentifiable;
   }
-  r.std_devs = options.estimate_std
-                   ? estimateStdDevs(*cost, space, es->best().genes)
+  if (r.estimator == "short_term")
+    std_devs = options.estimate_std
+                   ? estimateStdDevs(*cost, space, best_genes)
                    : std::vector<double>(r.values.size(), std::numeric_limits<double>::quiet_NaN());
+  r.std_devs = std_devs;
   r.model = model;
   setValues(r.model, r.parameters, r.values);
   r.wall_time_s = elapsed();

@@ -302,7 +302,9 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
   out.observation_cost_m2 = observationCost();
   for (size_t j = 0; j < p->smooth.size(); ++j) out.genes[p->smooth[j]] = theta[j];
   out.values = space.toPhysical(out.genes);
-  const int unknowns = static_cast<int>(theta.size()) + S * ns;
+  // With nearly hard continuity the segment states are one trajectory's: its start state and
+  // the parameters are what the observations determine.
+  const int unknowns = static_cast<int>(theta.size()) + ns;
   const int dof = std::max(1, out.observations - unknowns);
   out.noise_std_m = std::sqrt(out.observation_cost_m2 / dof);
 
@@ -343,7 +345,8 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
         if (lambda[q] > 1e-10 * top) pinv += v * v.transpose() / lambda[q];
         else null_loading += v.cwiseProduct(v);
       }
-      const double scale2 = std::pow(out.noise_std_m / out.noise_std_prior_m, 2);
+      const double scale2 =
+          options.std_from_given_noise ? 1.0 : std::pow(out.noise_std_m / out.noise_std_prior_m, 2);
       for (int k = 0; k < np; ++k) {
         const size_t gene = static_cast<size_t>(p->smooth[k]);
         const double gene_var = pinv(k, k) * d[k] * d[k] * scale2;
@@ -359,6 +362,19 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
   }
   out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
   return out;
+}
+
+std::vector<double> cramerRaoBound(const Model& model, const Trajectory& trajectory,
+                                   const ParameterSpace& space, double noise_std_m,
+                                   int segment_frames) {
+  const std::vector<double> truth = space.toSearch(getValues(model, freeParameters(model)));
+  OutputErrorOptions o;
+  o.segment_frames = segment_frames;
+  o.noise_std_m = noise_std_m;
+  o.std_from_given_noise = true;
+  o.max_iterations = 20;  // only the segment states move (the data are the truth's own motion)
+  const OutputErrorResult r = estimateOutputError(model, trajectory, space, truth, o);
+  return r.std_devs;
 }
 
 }  // namespace mme

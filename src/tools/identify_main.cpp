@@ -21,6 +21,7 @@ const char* kUsage =
     "                [--first-frame F] [--frames N] [--seed S] [--threads T]\n"
     "                [--compare-to-model] [--target-cost C] [--max-time-s S] [--quiet]\n"
     "                [--preset default|paper] [--patience G]\n"
+    "                [--cost auto|short_term|output_error] [--segment-frames K]\n"
     "                [--refine bobyqa|newuoa|praxis|levenberg_marquardt] [--refine-start G]\n"
     "                [--refine-period G]\n";
 
@@ -49,11 +50,17 @@ mme::Trajectory sliceFrames(const mme::Trajectory& in, int first, int count) {
   return out;
 }
 
+std::string formatMetres(double m) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.3g m", m);
+  return text;
+}
+
 int run(int argc, char** argv) {
   mme::CliArgs args(argc, argv,
                     {"model", "trajectory", "topic", "out", "method", "generations", "population",
                      "window-frames", "first-frame", "frames", "seed", "threads", "target-cost",
-                     "max-time-s", "refine", "refine-start", "refine-period", "preset", "patience"},
+                     "max-time-s", "refine", "refine-start", "refine-period", "preset", "patience", "cost", "segment-frames"},
                     {"compare-to-model", "quiet", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -76,6 +83,11 @@ int run(int argc, char** argv) {
   mme::IdentifyOptions options = mme::identifyOptionsFor(preset);
   options.patience_generations = static_cast<int>(
       args.getInt("patience", options.patience_generations, 0, 100000000));
+  if (args.has("cost") && !mme::parseCostChoice(args.get("cost"), &options.cost))
+    throw mme::InputError("--cost '" + args.get("cost") +
+                          "' is unknown (available: auto, short_term or output_error)");
+  options.output_error.segment_frames = static_cast<int>(
+      args.getInt("segment-frames", options.output_error.segment_frames, 2, 100000));
   options.generations = static_cast<int>(args.getInt("generations", 1000, 1, 100000000));
   options.es.population = static_cast<int>(args.getInt("population", 100, 2, 1000000));
   options.es.offspring = options.es.population;
@@ -176,12 +188,18 @@ int run(int argc, char** argv) {
   std::printf("global cost %.6e m^2 over %d frames, %d generations, %llu evaluations, %.2f s\n",
               r.global_cost, r.frames, r.generations,
               static_cast<unsigned long long>(r.evaluations), r.wall_time_s);
+  std::printf("estimator: %s (--cost %s; marker noise estimated from the data %.3g m%s), %d "
+              "substep(s) per frame (stiffest mode omega*h %.3g)\n",
+              r.estimator.c_str(), mme::costChoiceName(options.cost), r.noise_estimate_m,
+              r.estimator == "output_error"
+                  ? (", from the fit's residuals " + formatMetres(r.noise_std_m)).c_str() : "",
+              r.substeps, r.stiffest_omega_h);
   std::printf("stopped: %s (last refinement: %s %s)\n", mme::identifyStopName(r.stop),
               mme::refineAlgorithmName(options.es.refine_algorithm),
               mme::refineStatusName(r.last_refine_status));
 
   mme::IdentificationInfo info;
-  info.method = "es";
+  info.method = r.estimator == "output_error" ? "es+output_error" : "es";
   info.global_cost = r.global_cost;
   info.frames = r.frames;
   info.generations = r.generations;

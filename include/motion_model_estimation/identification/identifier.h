@@ -10,11 +10,31 @@
 #include "motion_model_estimation/core/model.h"
 #include "motion_model_estimation/core/trajectory.h"
 #include "motion_model_estimation/identification/evolution_strategy.h"
+#include "motion_model_estimation/identification/output_error.h"
 
 namespace mme {
 
+/// Which cost gives the final answer.
+enum class CostChoice {
+  kAuto,         ///< output error when the markers' estimated noise reaches auto_noise_threshold_m
+  kShortTerm,    ///< the paper's one-step prediction (exact on noiseless data, biased by noise)
+  kOutputError,  ///< multiple shooting (output_error.h), started from the search's answer
+};
+/// "auto" | "short_term" | "output_error" -> the enum; false when unknown.
+bool parseCostChoice(const std::string& name, CostChoice* choice);
+const char* costChoiceName(CostChoice choice);
+
 struct IdentifyOptions {
   EsOptions es;
+  CostChoice cost = CostChoice::kAuto;
+  /// kAuto: the output-error estimator runs when estimateMarkerNoise() is at least this [m]
+  /// (below it the one-step cost is exact to within what matters, and faster).
+  double auto_noise_threshold_m = 1e-7;
+  OutputErrorOptions output_error;
+  /// When the identified model's stiffest mode has omega h / substeps above this, the
+  /// prediction integrates with more substeps per frame (and the search resumes): semi-implicit
+  /// Euler's drift grows as (omega h)^2. 0: never.
+  double max_omega_h_per_substep = 0.2;
   int generations = 1000;        ///< generation budget
   double target_cost = 0.0;      ///< stop once the global cost [m^2] is <= it (0 = never)
   double max_wall_time_s = 0.0;  ///< stop after this wall time (0 = no limit)
@@ -55,8 +75,9 @@ enum class ParameterFlag {
   kNone,
   kAtLowerBound,  ///< within 1 % of its lower search bound (the answer may lie beyond)
   kAtUpperBound,  ///< within 1 % of its upper search bound
+  kUnidentifiable,  ///< the data do not determine it (output error: null space, or std > value)
 };
-/// "" | "at_lower_bound" | "at_upper_bound".
+/// "" | "at_lower_bound" | "at_upper_bound" | "unidentifiable".
 const char* parameterFlagName(ParameterFlag flag);
 
 struct IdentifyResult {
@@ -73,6 +94,11 @@ struct IdentifyResult {
   RefineStatus last_refine_status = RefineStatus::kNotRun;  ///< how the last refinement ended
   int bound_widenings = 0;           ///< searches resumed after widening default bounds
   std::vector<std::string> notes;    ///< what happened on the way (widened bounds, ...)
+  std::string estimator;             ///< the cost of the final answer: "short_term" | "output_error"
+  double noise_estimate_m = 0.0;     ///< estimateMarkerNoise() of the data
+  double noise_std_m = 0.0;          ///< output error: from its residuals (else 0)
+  int substeps = 1;                  ///< integration steps per frame the answer was fitted with
+  double stiffest_omega_h = 0.0;     ///< the answer's stiffest mode x frame period
   Model model;  ///< the input model with every free value filled in
 };
 

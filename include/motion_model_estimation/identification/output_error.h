@@ -33,6 +33,8 @@ struct OutputErrorOptions {
   double max_time_s = 0.0;          ///< 0 = no limit
   int threads = 1;                  ///< Ceres' threads evaluating segments
   bool estimate_std = true;         ///< 1-sigma std per parameter from the Jacobian at the optimum
+  /// The std from noise_std_m as given (the Cramer-Rao bound) rather than from the residuals.
+  bool std_from_given_noise = false;
 };
 
 struct OutputErrorResult {
@@ -65,5 +67,15 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
                                       const ParameterSpace& space,
                                       const std::vector<double>& start_genes,
                                       const OutputErrorOptions& options = {});
+
+/// The Cramer-Rao bound of the output-error model: the 1-sigma std [physical units] of every
+/// smooth parameter an efficient estimator would reach from `trajectory` with white marker noise
+/// of noise_std_m, the initial positions and velocities unknown too (Fisher information
+/// J^T J / sigma^2, J = d(every observed position) / d(parameters, initial state), the states
+/// eliminated). `trajectory` is the noiseless motion of `model` whose free values are the truth
+/// (its occlusion pattern is the data's). NaN for thresholds and undetermined parameters.
+std::vector<double> cramerRaoBound(const Model& model, const Trajectory& trajectory,
+                                   const ParameterSpace& space, double noise_std_m,
+                                   int segment_frames = 10);
 
 }  // namespace mme
