@@ -115,7 +115,8 @@ std::string brief(const std::vector<RunResult>& runs) {
   for (const RunResult& r : runs) {
     s += " " + r.method + ":";
     if (!r.applicable) s += "n/a";
-    else s += num(r.errors.max, "%.2g") + "%/" + num(r.wall_s, "%.1f") + "s";
+    else s += num(r.errors.max, "%.2g") + "%/" + num(r.wall_s, "%.1f") + "s" +
+              (r.estimator == "output_error" ? "/oe" : "");
   }
   return s;
 }
@@ -188,10 +189,15 @@ Problem mapProblem(const std::string& axis, double value, int seed, int frames) 
   }
   mme::State state;
   mme::Trajectory data = bench::simulateWindow(truth, frames, truth.frame_rate_hz, 0, &state);
-  if (axis == "noise") mme::addGaussianNoise(&data, value, 1000 + seed);
   if (axis == "occlusion") bench::occludeRandomly(&data, value, 2000 + seed);
+  const mme::Trajectory noiseless = data;  // same occlusion pattern (the Cramer-Rao bound's data)
+  if (axis == "noise") mme::addGaussianNoise(&data, value, 1000 + seed);
   Problem p = bench::makeProblem("paper_object", truth, 1, data, state);
   if (axis == "spread") p.start_spread = value;
+  if (axis == "noise" && value > 0.0) {
+    p.noise_std_m = value;
+    p.noiseless_data = noiseless;
+  }
   return p;
 }
 
@@ -238,7 +244,8 @@ void speedAccuracy(const Settings& s, const std::vector<std::string>& methods) {
   const std::vector<SpeedScene> scenes = speedScenes(s);
   std::FILE* runs = openCsv(s, "speed_accuracy_runs.csv",
       "scene,method,seed,unknowns,applicable,evaluations,wall_s,median_error_pct,max_error_pct,cost,"
-      "evals_to_1pct,wall_to_1pct,evals_to_0.01pct,wall_to_0.01pct,generations,restarts,bounded,note");
+      "evals_to_1pct,wall_to_1pct,evals_to_0.01pct,wall_to_0.01pct,generations,restarts,bounded,"
+      "output_error,substeps,note");
   std::FILE* trace = openCsv(s, "speed_accuracy_trace.csv",
       "scene,method,seed,evaluations,wall_s,cost,median_error_pct,max_error_pct");
   std::mutex csv_mutex;
@@ -247,13 +254,14 @@ void speedAccuracy(const Settings& s, const std::vector<std::string>& methods) {
     auto ms = [](const bench::Milestone& m, bool evals) {
       return m.reached ? (evals ? std::to_string(m.evaluations) : num(m.wall_s, "%.4f")) : std::string("-1");
     };
-    std::fprintf(runs, "%s,%s,%d,%zu,%d,%llu,%.4f,%s,%s,%s,%s,%s,%s,%s,%d,%d,%d,%s\n", scene.c_str(),
+    std::fprintf(runs, "%s,%s,%d,%zu,%d,%llu,%.4f,%s,%s,%s,%s,%s,%s,%s,%d,%d,%d,%s,%d,%s\n", scene.c_str(),
                  r.method.c_str(), seed, p.space->size(), r.applicable ? 1 : 0,
                  static_cast<unsigned long long>(r.evaluations), r.wall_s,
                  num(r.errors.median).c_str(), num(r.errors.max).c_str(), num(r.cost).c_str(),
                  ms(r.to_1pct, true).c_str(), ms(r.to_1pct, false).c_str(), ms(r.to_001pct, true).c_str(),
                  ms(r.to_001pct, false).c_str(), r.generations, r.restarts, r.bounded ? 1 : 0,
-                 clean(r.note).c_str());
+                 r.estimator.empty() ? "n/a" : r.estimator == "output_error" ? "1" : "0",
+                 r.substeps > 0 ? r.substeps : p.model.substeps, clean(r.note).c_str());
     for (const bench::TracePoint& t : r.trace)
       std::fprintf(trace, "%s,%s,%d,%llu,%.5f,%.6g,%.6g,%.6g\n", scene.c_str(), r.method.c_str(), seed,
                    static_cast<unsigned long long>(t.evaluations), t.wall_s, t.cost,
@@ -270,7 +278,8 @@ void speedAccuracy(const Settings& s, const std::vector<std::string>& methods) {
           problem->space->size(), problem->data.numFrames(), problem->cost->numParticles(),
           problem->lls_applicable ? "applies" : ("n/a: " + problem->lls_reason).c_str());
       for (int seed = 1; seed <= sc.seeds; ++seed)
-        for (const std::string& m : methods)
+        for (const std::string& m : methods) {
+          if (m == "sade_final") continue;  // the map's conditional axis only
           jobs.push_back([&, problem, sc, seed, m, pass]() {
             RunResult r = bench::runMethod(m, *problem, seed, sc.budget, seed == 1);
             if (pass == 0 && r.wall_s < kRetimeBelowS) {
@@ -294,6 +303,7 @@ void speedAccuracy(const Settings& s, const std::vector<std::string>& methods) {
                 r.wall_s, r.note.c_str());
             write(sc.name, seed, *problem, r);
           });
+        }
     }
     runPool(jobs, pass == 0 ? 1 : s.workers);
   }
@@ -321,9 +331,9 @@ std::vector<MapInstance> mapInstances(const Settings& s) {
     frames = 30;
     seeds = std::min(seeds, 2);
   } else {
-    axes = {{"noise", {0.0, 1e-6, 1e-5, 1e-4}},
+    axes = {{"noise", {0.0, 1e-6, 1e-5, 1e-4, 1e-3}},
             {"omega_h", {0.05, 0.2, 0.5, 1.0, 2.5}},
-            {"occlusion", {0.05, 0.1, 0.2, 0.4}},  // 0 = the noise axis' base run
+            {"occlusion", {0.05, 0.1, 0.2, 0.4, 0.6}},  // 0 = the noise axis' base run
             {"spread", {0.02, 0.1, 0.3, 0.6}},
             {"unknowns", {10, 20, 50, 100, 200}},
             {"conditional", {0, 2, 5, 10}}};
@@ -358,10 +368,24 @@ std::vector<MapInstance> mapInstances(const Settings& s) {
   return out;
 }
 
+double median(std::vector<double> v);
+
+/// The methods of the map on one axis: es_early is a schedule variant shown in the
+/// speed-accuracy part only; sade_final (sade judged on its final answer) runs on the
+/// conditional axis only, where the oracle stop matters (see the summary's notes).
+bool mapRuns(const std::string& method, const std::string& axis) {
+  if (method == "es_early") return false;
+  if (method == "sade_final") return axis == "conditional";
+  return true;
+}
+
 void stabilityMap(const Settings& s, const std::vector<std::string>& methods) {
   const std::vector<MapInstance> instances = mapInstances(s);
   std::vector<std::vector<RunResult>> results(instances.size());
   std::vector<size_t> unknowns(instances.size(), 0);
+  std::vector<int> substeps(instances.size(), 1);
+  std::vector<std::vector<double>> bound_pct(instances.size());  // per parameter, noisy instances
+  std::vector<std::vector<double>> truth(instances.size());
   std::atomic<int> done{0};
   const auto t0 = Clock::now();
   std::vector<std::function<void()>> jobs;
@@ -370,12 +394,12 @@ void stabilityMap(const Settings& s, const std::vector<std::string>& methods) {
       const MapInstance& in = instances[j];
       const Problem p = mapProblem(in.axis, in.value, in.seed, in.frames);
       unknowns[j] = p.space->size();
-      for (const std::string& m : methods) {
-        // es_early is a schedule variant shown in the speed-accuracy part only (keeps the full
-        // run under 30 minutes).
-        if (m == "es_early") continue;
-        results[j].push_back(bench::runMethod(m, p, in.seed, in.budget, false));
-      }
+      substeps[j] = p.model.substeps;
+      truth[j] = p.truth_values;
+      // Once per instance (a Ceres solve: 0.1-1 s), not per method.
+      bound_pct[j] = bench::cramerRaoPct(p);
+      for (const std::string& m : methods)
+        if (mapRuns(m, in.axis)) results[j].push_back(bench::runMethod(m, p, in.seed, in.budget, false));
       say("(b) %3d/%zu %-11s %-7g seed %2d (%5.0f s)%s\n", ++done, instances.size(), in.axis.c_str(),
           in.value, in.seed, since(t0), brief(results[j]).c_str());
     });
@@ -383,20 +407,34 @@ void stabilityMap(const Settings& s, const std::vector<std::string>& methods) {
 
   std::FILE* f = openCsv(s, "stability_runs.csv",
       "axis,value,seed,method,unknowns,applicable,success,max_error_pct,median_error_pct,evaluations,"
-      "wall_s,generations_to_1pct,evals_to_1pct,bounded,note");
+      "wall_s,generations_to_1pct,evals_to_1pct,bounded,bound_median_pct,bound_max_pct,efficiency,"
+      "output_error,substeps,noise_estimate_m,ever_within_1pct,note");
   for (size_t j = 0; j < instances.size(); ++j) {
     std::vector<std::string> axes{instances[j].axis};
     if (instances[j].axis == "noise" && instances[j].value == 0.0) axes.push_back("occlusion");  // shared base
+    // The bound's median and worst over the parameters it is defined for.
+    std::vector<double> finite;
+    for (double b : bound_pct[j])
+      if (std::isfinite(b)) finite.push_back(b);
+    const double b_med = median(finite);
+    const double b_max = finite.empty() ? NAN : *std::max_element(finite.begin(), finite.end());
     for (const std::string& axis : axes)
-      for (const RunResult& r : results[j])
-        std::fprintf(f, "%s,%g,%d,%s,%zu,%d,%d,%s,%s,%llu,%.4f,%d,%lld,%d,%s\n", axis.c_str(),
+      for (const RunResult& r : results[j]) {
+        const bool pipeline = !r.estimator.empty();
+        const double eff = r.applicable ? bench::medianEfficiency(r.values, truth[j], bound_pct[j]) : NAN;
+        std::fprintf(f, "%s,%g,%d,%s,%zu,%d,%d,%s,%s,%llu,%.4f,%d,%lld,%d,%s,%s,%s,%s,%d,%s,%d,%s\n", axis.c_str(),
                      instances[j].value, instances[j].seed, r.method.c_str(), unknowns[j],
                      r.applicable ? 1 : 0, r.applicable && r.errors.max < 1.0 ? 1 : 0,
                      num(r.errors.max).c_str(), num(r.errors.median).c_str(),
                      static_cast<unsigned long long>(r.evaluations), r.wall_s,
                      r.to_1pct.reached ? r.to_1pct.generations : -1,
                      r.to_1pct.reached ? static_cast<long long>(r.to_1pct.evaluations) : -1LL,
-                     r.bounded ? 1 : 0, clean(r.note).c_str());
+                     r.bounded ? 1 : 0, num(b_med).c_str(), num(b_max).c_str(), num(eff).c_str(),
+                     pipeline ? (r.estimator == "output_error" ? "1" : "0") : "n/a",
+                     r.substeps > 0 ? r.substeps : substeps[j],
+                     pipeline ? num(r.noise_estimate_m).c_str() : "n/a", r.to_1pct.reached ? 1 : 0,
+                     clean(r.note).c_str());
+      }
   }
   std::fclose(f);
 }

@@ -6,11 +6,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <stdexcept>
 
 #include "motion_model_estimation/identification/evolution_strategy.h"
+#include "motion_model_estimation/identification/identifier.h"
 
 #ifdef MME_HAVE_PAGMO
 #include <pagmo/algorithm.hpp>
@@ -26,12 +28,13 @@
 namespace bench {
 
 std::vector<std::string> allMethods() {
-  return {"es_local", "es_early", "es_lm", "es_global", "cmaes", "sade", "bobyqa", "lm", "lls"};
+  return {"default", "es_local", "es_early", "es_lm", "es_global", "cmaes",
+          "sade",    "sade_final", "bobyqa", "lm",  "lls"};
 }
 
 bool methodAvailable(const std::string& method) {
 #ifndef MME_HAVE_PAGMO
-  if (method == "cmaes" || method == "sade") return false;
+  if (method == "cmaes" || method == "sade" || method == "sade_final") return false;
 #endif
 #ifndef MME_HAVE_CERES
   if (method == "lm") return false;
@@ -210,6 +213,74 @@ RunResult runEs(const Problem& p, uint64_t seed, const Budget& budget, bool keep
     tracker.observe(es.best().genes, es.best().cost, es.evaluations(), es.generation());
   }
   tracker.finish(&r);
+  return r;
+}
+
+// ---------------------------------------------------------------- the default engine
+/// `identify` with no option: identifyModel(identifyOptionsFor(kDefault)) on the problem's
+/// model and data, one thread, the run's seed, its wall budget and its evaluation budget as
+/// generations of `offspring` children. Its own starts (the paper's initial distribution and the
+/// equation-error seeds); judged on the final answer, whatever the oracle stop says.
+RunResult runDefault(const Problem& p, uint64_t seed, const Budget& budget, bool keep_trace) {
+  RunResult r;
+  mme::IdentifyOptions o = mme::identifyOptionsFor(mme::Preset::kDefault);
+  o.es.seed = seed;
+  o.es.threads = 1;
+  o.max_wall_time_s = budget.max_wall_s;
+  o.generations = static_cast<int>(std::max<uint64_t>(
+      1, budget.max_evaluations / static_cast<uint64_t>(std::max(1, o.es.offspring))));
+  const auto start = Clock::now();
+  // The best-so-far curve of the search (its best on the one-step cost after every generation),
+  // then the final answer.
+  auto push = [&r, &p](uint64_t evaluations, double wall_s, double cost, const std::vector<double>& values) {
+    const Errors e = relativeErrors(values, p.truth_values);
+    TracePoint t{evaluations, wall_s, cost, e.median, e.max};
+    if (!r.trace.empty() && r.trace.back().evaluations == t.evaluations) r.trace.back() = t;
+    else if (r.trace.empty() || t.evaluations >= r.trace.back().evaluations + 1 + r.trace.back().evaluations / 40)
+      r.trace.push_back(t);
+  };
+  std::function<void(const mme::Progress&)> progress;
+  if (keep_trace)
+    progress = [&](const mme::Progress& pr) {
+      if (pr.message.empty() && !pr.best_values.empty())
+        push(pr.evaluations, pr.wall_time_s, pr.best_cost, pr.best_values);
+    };
+  mme::IdentifyResult result;
+  try {
+    result = mme::identifyModel(p.model, p.data, o, progress);
+  } catch (const std::exception& e) {
+    r.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+    r.values.assign(p.space->size(), std::numeric_limits<double>::quiet_NaN());
+    r.cost = kInf;
+    r.errors.median = r.errors.max = 1e300;
+    r.note = std::string("identify failed: ") + e.what();
+    return r;
+  }
+  r.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+  r.values = result.values;
+  r.evaluations = result.evaluations;  // the search's; the output-error solve is not counted
+  r.generations = result.generations;
+  r.errors = relativeErrors(r.values, p.truth_values);
+  // The one-step cost of the answer at the problem's substeps, comparable with the others'.
+  r.cost = p.cost->evaluate(r.values, nullptr);
+  if (!std::isfinite(r.cost)) r.cost = kInf;
+  r.estimator = result.estimator;
+  r.substeps = result.substeps;
+  r.noise_estimate_m = result.noise_estimate_m;
+  for (mme::ParameterFlag f : result.flags) r.flagged += f != mme::ParameterFlag::kNone;
+  for (auto [ms, threshold] : {std::make_pair(&r.to_1pct, 1.0), std::make_pair(&r.to_001pct, 0.01)})
+    if (r.errors.max < threshold) {
+      ms->reached = true;
+      ms->evaluations = r.evaluations;
+      ms->wall_s = r.wall_s;
+      ms->generations = r.generations;
+    }
+  if (keep_trace) push(r.evaluations, r.wall_s, r.cost, r.values);
+  char note[256];
+  std::snprintf(note, sizeof(note), "final answer: %s; stop %s; substeps %d; noise estimate %.2g m; "
+                "%d widening(s); %d flagged", result.estimator.c_str(), mme::identifyStopName(result.stop),
+                result.substeps, result.noise_estimate_m, result.bound_widenings, r.flagged);
+  r.note = note;
   return r;
 }
 
@@ -556,7 +627,8 @@ bool solveEquationError(const Problem& p, std::vector<double>* values, std::stri
 RunResult runMethod(const std::string& method, const Problem& problem, uint64_t seed,
                     const Budget& budget, bool keep_trace) {
   RunResult r;
-  if (method == "es_local") r = runEs(problem, seed, budget, keep_trace, true, Schedule::kPaper);
+  if (method == "default") r = runDefault(problem, seed, budget, keep_trace);
+  else if (method == "es_local") r = runEs(problem, seed, budget, keep_trace, true, Schedule::kPaper);
   else if (method == "es_early")
     r = runEs(problem, seed, budget, keep_trace, true, Schedule::kEarlyBobyqa);
   else if (method == "es_lm") r = runEs(problem, seed, budget, keep_trace, true, Schedule::kEarlyLm);
@@ -567,13 +639,18 @@ RunResult runMethod(const std::string& method, const Problem& problem, uint64_t 
 #ifdef MME_HAVE_PAGMO
   else if (method == "cmaes") r = runPagmo(problem, seed, budget, keep_trace, true);
   else if (method == "sade") r = runPagmo(problem, seed, budget, keep_trace, false);
+  else if (method == "sade_final") {
+    Budget no_oracle = budget;
+    no_oracle.stop_max_error_pct = 0.0;  // its best point at the budget's end is the answer
+    r = runPagmo(problem, seed, no_oracle, keep_trace, false);
+  }
 #endif
 #ifdef MME_HAVE_CERES
   else if (method == "lm") r = runLm(problem, seed, budget, keep_trace);
 #endif
   else throw std::invalid_argument("method not available: " + method);
   r.method = method;
-  r.bounded = r.applicable && rolloutBounded(problem, r.values);
+  r.bounded = r.applicable && rolloutBounded(problem, r.values, r.substeps);
   return r;
 }
 

@@ -1,6 +1,12 @@
 // The methods compared by the peer benchmark, all on the same Problem (cost function, search
 // space, random starts) and judged the same way: the best-cost point found so far is the
-// method's answer; its parameter errors against the truth are recorded along the run.
+// method's answer; its parameter errors against the truth are recorded along the run. The one
+// exception is `default`, judged on the final answer it returns.
+//   default    the package's default engine exactly as `identify` runs it (mme::identifyModel
+//              with identifyOptionsFor(kDefault): ES + LM on the one-step cost, equation-error
+//              seeds, threshold search, bound widening, convergence stop, automatic substeps,
+//              the output-error estimator when the markers' noise reaches 1e-7 m); it stops by
+//              itself, takes its own starts and is judged on its final answer (no oracle stop)
 //   es_local   the paper's ES with local costs (mme::EvolutionStrategy, default options)
 //   es_early   the same engine with its refinement from generation 10, every 10 (the paper:
 //              from 400, every 100); run in the speed-accuracy part only
@@ -10,9 +16,11 @@
 //              (share_partial_replica = share_crossover = 0, their share given to share_replica)
 //   cmaes      pagmo2 CMA-ES (restarts from the next starts when it stops or stalls)
 //   sade       pagmo2 self-adaptive differential evolution (jDE), same restarts
+//   sade_final sade without the oracle stop, judged on its best point at the budget's end (the
+//              stability map's conditional axis only: the final-answer comparison with default)
 //   bobyqa     NLopt BOBYQA, multi-start from the same random starts until the budget
-//   lm         Ceres Levenberg-Marquardt, residuals = sqrt of the per-(particle, frame) cost
-//              terms, central numeric differences, multi-start until the budget
+//   lm         Ceres Levenberg-Marquardt on the cost's residuals, forward numeric
+//              differences, multi-start until the budget
 //   lls        linear least squares on the equation error (one solve; linear springs only)
 #pragma once
 
@@ -66,6 +74,11 @@ struct RunResult {
   int restarts = 0;
   Milestone to_1pct, to_001pct;  ///< max error < 1 % and < 0.01 %
   bool bounded = false;           ///< long rollout of the answer stays bounded
+  // `default` only (the identify pipeline's result; others keep these defaults):
+  std::string estimator;          ///< "short_term" | "output_error" ("" = not the pipeline)
+  int substeps = 0;               ///< integration steps per frame of the answer (0 = the problem's)
+  double noise_estimate_m = -1.0; ///< the pipeline's marker-noise estimate (< 0 = not run)
+  int flagged = 0;                ///< parameters it flagged (at a bound, unidentifiable)
   std::vector<TracePoint> trace;  ///< best-so-far curve (thinned)
 };
 
@@ -75,7 +88,8 @@ std::vector<std::string> availableMethods();
 std::vector<std::string> allMethods();
 bool methodAvailable(const std::string& method);
 
-/// Runs one method on one problem from the random starts of `seed`.
+/// Runs one method on one problem from the random starts of `seed` (`default`: its own starts
+/// for that seed; budget.stop_max_error_pct does not apply to it).
 RunResult runMethod(const std::string& method, const Problem& problem, uint64_t seed,
                     const Budget& budget, bool keep_trace);
 

@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <set>
 #include <utility>
 
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/identification/output_error.h"
 #include "motion_model_estimation/scenes/random_object.h"
 
 namespace bench {
@@ -126,6 +128,38 @@ Problem makeProblem(const std::string& name, const mme::Model& truth, int identi
   return p;
 }
 
+std::vector<double> cramerRaoPct(const Problem& problem) {
+  if (!(problem.noise_std_m > 0.0) || problem.noiseless_data.numFrames() == 0) return {};
+  mme::Model m = problem.truth;
+  m.substeps = problem.model.substeps;
+  m.frame_rate_hz = problem.model.frame_rate_hz;
+  std::vector<double> bound;
+  try {
+    bound = mme::cramerRaoBound(m, problem.noiseless_data, *problem.space, problem.noise_std_m);
+  } catch (const std::exception&) {
+    bound.clear();
+  }
+  bound.resize(problem.truth_values.size(), std::numeric_limits<double>::quiet_NaN());
+  for (size_t k = 0; k < bound.size(); ++k)
+    bound[k] = 100.0 * bound[k] / std::max(std::abs(problem.truth_values[k]), 1e-300);
+  return bound;
+}
+
+double medianEfficiency(const std::vector<double>& values, const std::vector<double>& truth,
+                        const std::vector<double>& bound_pct) {
+  std::vector<double> ratio;
+  for (size_t k = 0; k < values.size() && k < truth.size() && k < bound_pct.size(); ++k) {
+    if (!(std::isfinite(bound_pct[k]) && bound_pct[k] > 0.0)) continue;
+    const double error_pct = 100.0 * std::abs(values[k] - truth[k]) / std::max(std::abs(truth[k]), 1e-300);
+    if (!std::isfinite(error_pct)) return std::numeric_limits<double>::quiet_NaN();
+    ratio.push_back(error_pct / bound_pct[k]);
+  }
+  if (ratio.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(ratio.begin(), ratio.end());
+  const size_t n = ratio.size();
+  return n % 2 ? ratio[n / 2] : 0.5 * (ratio[n / 2 - 1] + ratio[n / 2]);
+}
+
 void occludeRandomly(mme::Trajectory* data, double share, uint64_t seed) {
   if (share <= 0.0) return;
   mme::Random random(seed);
@@ -184,11 +218,11 @@ double costOfGenes(const Problem& problem, std::vector<double>* genes) {
   return std::isfinite(c) ? c : 1e300;
 }
 
-bool rolloutBounded(const Problem& problem, const std::vector<double>& values) {
+bool rolloutBounded(const Problem& problem, const std::vector<double>& values, int substeps) {
   for (double v : values)
     if (!std::isfinite(v)) return false;
   mme::Model m = problem.truth;
-  m.substeps = problem.model.substeps;
+  m.substeps = substeps > 0 ? substeps : problem.model.substeps;
   mme::setValues(m, problem.space->refs(), values);
   try {
     mme::Simulator sim(m);

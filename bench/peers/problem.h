@@ -41,6 +41,10 @@ struct Problem {
   mme::State rollout_state;
   int rollout_frames = 0;
   double rollout_limit_m = 0.0;  ///< bounded = every displacement stays below it
+  /// Marker noise added to the data [m] (0: none) and the data before it was added (the same
+  /// occlusion pattern): what the Cramer-Rao bound is computed on.
+  double noise_std_m = 0.0;
+  mme::Trajectory noiseless_data;
   /// Equation-error least squares applies (linear springs/dampers, one step per frame).
   bool lls_applicable = false;
   std::string lls_reason;  ///< why not, when it does not apply
@@ -50,6 +54,17 @@ struct Problem {
 /// `data_state` is the exact state at the data's first frame (for the rollout check).
 Problem makeProblem(const std::string& name, const mme::Model& truth, int identification_substeps,
                     const mme::Trajectory& data, const mme::State& data_state);
+
+/// The Cramer-Rao bound (mme::cramerRaoBound: output-error model, initial state unknown, white
+/// marker noise of problem.noise_std_m) of every free parameter as a share of its true value
+/// [%], computed on the truth at the identification substeps and the noiseless data; NaN for
+/// thresholds and undetermined parameters; empty when the data are noise-free.
+std::vector<double> cramerRaoPct(const Problem& problem);
+
+/// Per-parameter |value - truth| / bound (bound in % of the truth, as cramerRaoPct): the median
+/// over the parameters with a finite bound; NaN when there is none or the values are not finite.
+double medianEfficiency(const std::vector<double>& values, const std::vector<double>& truth,
+                        const std::vector<double>& bound_pct);
 
 /// Simulates `frames` frames of `model` (its substeps) at `rate_hz`, keeping the exact state at
 /// frame `first` (returned in *state_at_first) and returning frames [first, frames).
@@ -78,10 +93,11 @@ class Starts {
 /// Global cost of genes (reflected into the bounds first, as the engine does with its moves).
 double costOfGenes(const Problem& problem, std::vector<double>* genes);
 
-/// Simulates the identified model (truth with `values` installed, identification substeps)
-/// from the exact state at the first data frame for rollout_frames frames: true when every
-/// position stays finite and within rollout_limit_m of its start.
-bool rolloutBounded(const Problem& problem, const std::vector<double>& values);
+/// Simulates the identified model (truth with `values` installed, `substeps` steps per frame:
+/// the ones it was identified with; 0 = the problem's identification substeps) from the exact
+/// state at the first data frame for rollout_frames frames: true when every position stays
+/// finite and within rollout_limit_m of its start.
+bool rolloutBounded(const Problem& problem, const std::vector<double>& values, int substeps = 0);
 
 /// Linear spring-network test scene for the scaling experiment: a rows x cols sheet with
 /// structural, shear and bending springs (3 types, 6 unknowns), floating and vibrating.

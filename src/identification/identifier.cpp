@@ -84,12 +84,11 @@ std::vector<double> estimateStdDevs(const Cost& cost, const ParameterSpace& spac
 
 namespace {
 
-/// Share of a gene's distance to a bound under which it counts as at the bound: 1 % of the
-/// value for log genes, 1 % of the range for linear ones.
-constexpr double kAtBoundShare = 0.01;
 /// A default bound the answer reached moves this far out (a factor for log genes, ranges for
 /// linear ones).
 constexpr double kWidenFactor = 10.0;
+/// A one-step fit with an RMS residual below this [m] is exact: the data hold no noise to filter.
+constexpr double kExactFitRms_m = 1e-9;
 /// Most substeps per frame the stiff-scene rule asks for.
 constexpr int kMaxSubsteps = 64;
 
@@ -97,14 +96,6 @@ std::string formatValue(double v) {
   char text[32];
   std::snprintf(text, sizeof(text), "%.6g", v);
   return text;
-}
-
-/// -1 at the lower bound, +1 at the upper, 0 inside.
-int atBound(const Gene& g, double gene) {
-  const double tolerance = g.log_scale ? std::log1p(kAtBoundShare) : kAtBoundShare * (g.upper - g.lower);
-  if (gene - g.lower <= tolerance) return -1;
-  if (g.upper - gene <= tolerance) return 1;
-  return 0;
 }
 
 /// Smooth genes within 1 % of a default (not user-given) bound, with the side (-1 lower, +1
@@ -115,7 +106,7 @@ std::vector<std::pair<size_t, int>> widenableAtBound(const ParameterSpace& space
   for (size_t k = 0; k < space.size(); ++k) {
     const Gene& g = space.gene(k);
     if (!g.smooth || g.clamp_length) continue;
-    const int side = atBound(g, genes[k]);
+    const int side = space.boundSide(k, genes[k]);
     if (side != 0 && !(side < 0 ? g.user_lower : g.user_upper)) out.emplace_back(k, side);
   }
   return out;
@@ -226,7 +217,9 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
   auto elapsed = [&start]() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
-  const auto note = [&](const std::string& text, int generation, uint64_t evaluations) {
+  std::string note_prefix;  // names a trial whose notes may be discarded
+  const auto note = [&](const std::string& raw, int generation, uint64_t evaluations) {
+    const std::string text = note_prefix + raw;
     notes.push_back(text);
     if (!progress) return;
     Progress p;
@@ -339,20 +332,48 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
   };
   double omega_h = omegaH(es->bestValues());
   if (options.max_omega_h_per_substep > 0.0 && stop != IdentifyStop::kWallTime &&
-      omega_h / model.substeps > options.max_omega_h_per_substep) {
+      trajectory.numFrames() >= 3 && omega_h / model.substeps > options.max_omega_h_per_substep) {
     const int needed = std::min(
         kMaxSubsteps, static_cast<int>(std::ceil(omega_h / options.max_omega_h_per_substep)));
-    if (needed > model.substeps) {
-      note("the stiffest mode has omega*h = " + formatValue(omega_h) + " at " +
-               std::to_string(model.substeps) + " substep(s) per frame: the prediction now uses " +
-               std::to_string(needed) + " substeps per frame, search resumed",
-           generations_done, evaluations_done);
+    if (needed > model.substeps && generations_done < options.generations) {
+      // Decided by the data: the finer integrator is kept only when it predicts the frames
+      // clearly better (data made by a coarse integrator, e.g. a simulation, keep theirs).
+      const int before = model.substeps;
+      const double cost_before = es->best().cost;
+      const std::vector<double> genes_before = es->best().genes;
+      std::unique_ptr<EvolutionStrategy> es_before = std::move(es);
+      const std::shared_ptr<ShortTermCost> cost_before_ptr = cost;
       model.substeps = needed;
       cost = std::make_shared<ShortTermCost>(model, trajectory);
-      seeds.insert(seeds.begin(), es->best().genes);
-      if (cost->termCount() > 0 && generations_done < options.generations) {
-        search();
+      seeds.insert(seeds.begin(), genes_before);
+      const IdentifyStop stop_before = stop;
+      const ParameterSpace space_before = space;
+      const size_t notes_before = notes.size();
+      const int widenings_before = widenings;
+      note_prefix = "(trying " + std::to_string(needed) + " substeps per frame) ";
+      if (cost->termCount() > 0) search();
+      note_prefix.clear();
+      if (es && es->best().cost < 0.5 * cost_before) {
         omega_h = omegaH(es->bestValues());
+        note("the stiffest mode has omega*h = " + formatValue(omega_h) + " per frame: with " +
+                 std::to_string(needed) + " substeps per frame instead of " +
+                 std::to_string(before) + " the prediction fits the frames better (one-step cost " +
+                 formatValue(es->best().cost) + " against " + formatValue(cost_before) +
+                 " m^2): kept",
+             generations_done, evaluations_done);
+      } else {
+        model.substeps = before;
+        cost = cost_before_ptr;
+        es = std::move(es_before);
+        stop = stop_before;
+        seeds.erase(seeds.begin());
+        space = space_before;  // what the discarded search widened goes with it
+        notes.resize(notes_before);
+        widenings = widenings_before;
+        note("the stiffest mode has omega*h = " + formatValue(omega_h) + " per frame; " +
+                 std::to_string(needed) + " substeps per frame did not fit the frames better than " +
+                 std::to_string(before) + ": kept " + std::to_string(before),
+             generations_done, evaluations_done);
       }
     }
   }
@@ -366,9 +387,13 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
   std::vector<double> best_genes = es->best().genes;
   std::vector<uint8_t> unidentifiable(space.size(), 0);
   std::vector<double> std_devs;
+  // Auto: the output error when the markers look noisy and the one-step fit is not exact (a
+  // fit to round-off means noiseless data the one-step model explains: nothing to gain).
+  const double fit_rms_m = std::sqrt(r.global_cost / std::max<double>(1.0, cost->residualCount()));
   const bool output_error =
       options.cost == CostChoice::kOutputError ||
-      (options.cost == CostChoice::kAuto && r.noise_estimate_m >= options.auto_noise_threshold_m);
+      (options.cost == CostChoice::kAuto && r.noise_estimate_m >= options.auto_noise_threshold_m &&
+       fit_rms_m >= kExactFitRms_m);
   if (output_error && stop != IdentifyStop::kWallTime) {
     // From the search's answer and from the smoothed equation-error solutions (the one-step
     // optimum is biased by noise, badly so at a millimetre); the lowest output-error cost wins.
@@ -431,7 +456,7 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
   r.notes = notes;
   r.flags.assign(r.values.size(), ParameterFlag::kNone);
   for (size_t k = 0; k < space.size(); ++k) {
-    const int side = atBound(space.gene(k), best_genes[k]);
+    const int side = space.boundSide(k, best_genes[k]);
     if (side != 0) r.flags[k] = side < 0 ? ParameterFlag::kAtLowerBound : ParameterFlag::kAtUpperBound;
     else if (unidentifiable[k]) r.flags[k] = ParameterFlag::kUnidentifiable;
   }

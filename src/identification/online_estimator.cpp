@@ -9,6 +9,7 @@
 #include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/identification/output_error.h"
 #include "motion_model_estimation/identification/threshold_search.h"
 
 namespace mme {
@@ -40,7 +41,8 @@ void checkModel(const Model& model) {
 struct OnlineEstimator::BackgroundRefinement {
   std::atomic<bool> cancel{false};
   std::atomic<bool> done{false};
-  RefineResult result;  // written by the thread before `done`
+  RefineResult result;       // written by the thread before `done`
+  OutputErrorResult output;  // likewise, when the output-error fit ran
   std::thread thread;
   ~BackgroundRefinement() {
     cancel = true;
@@ -60,22 +62,40 @@ void OnlineEstimator::waitForRefinement() {
   if (refinement_ && refinement_->thread.joinable()) refinement_->thread.join();
 }
 
-void OnlineEstimator::startRefinement(std::shared_ptr<const Cost> cost) {
+void OnlineEstimator::startRefinement(std::shared_ptr<const Cost> cost, const Model& model,
+                                      const Trajectory& window) {
   auto job = std::make_unique<BackgroundRefinement>();
   RefineSettings settings = es_->refineSettings();
-  settings.deadline = std::chrono::steady_clock::now() +
-                      std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                          std::chrono::duration<double>(options_.refine_max_s));
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                            std::chrono::duration<double>(options_.refine_max_s));
+  settings.deadline = deadline;
   settings.cancel = &job->cancel;
   const Individual& best = es_->best();
   RefineStart start{best.genes, best.cost, best.mutability};
   BackgroundRefinement* out = job.get();
   const RefineAlgorithm algorithm = options_.es.refine_algorithm;
-  // The thread owns copies of what it reads (the space, the start) and shares the window's cost.
-  job->thread = std::thread([out, cost, space = es_->space(), start, settings, algorithm]() {
+  // The output-error fit continues from its own last answer (the one-step search's best is
+  // biased by the noise), or from the refined best the first time.
+  const bool output_error = use_output_error_;
+  const std::vector<double> warm = output_error_.ran ? output_error_.genes : std::vector<double>();
+  OutputErrorOptions oe_options = options_.output_error;
+  // The thread owns copies of what it reads (the space, the start, the window) and shares the
+  // window's cost.
+  job->thread = std::thread([out, cost, space = es_->space(), start, settings, algorithm,
+                             output_error, warm, oe_options, model, window, deadline]() mutable {
     const std::unique_ptr<Refiner> refiner = Refiner::Create(algorithm);
     try {
       out->result = refineAlternating(*refiner, *cost, space, start, settings, nullptr);
+      if (output_error && !out->cancel) {
+        const double left =
+            std::chrono::duration<double>(deadline - std::chrono::steady_clock::now()).count();
+        if (left > 0.0) {
+          oe_options.max_time_s = oe_options.max_time_s > 0.0 ? std::min(oe_options.max_time_s, left) : left;
+          out->output = estimateOutputError(model, window, space,
+                                            warm.empty() ? out->result.genes : warm, oe_options);
+        }
+      }
     } catch (const std::exception&) {
       out->result = RefineResult{start.genes, start.cost, 0, RefineStatus::kNoProgress};
     }
@@ -89,8 +109,13 @@ void OnlineEstimator::handOverRefinement() {
   if (!refinement_ || !refinement_->done) return;
   if (refinement_->thread.joinable()) refinement_->thread.join();
   const RefineResult result = refinement_->result;
+  const OutputErrorResult output = refinement_->output;
   refinement_.reset();
   if (result.evaluations > 0) es_->offer(result.genes);
+  if (output.ran) {
+    output_error_ = output;
+    es_->offer(output.genes);  // a good start for the global search too
+  }
   ++refinements_done_;
   last_refine_status_ = refineStatusName(result.status);
 }
@@ -230,6 +255,7 @@ bool OnlineEstimator::update() {
     stopRefinement();
     es_.reset();
     last_refine_generation_ = -1;
+    output_error_ = OutputErrorResult();
   }
   es_version_ = version;
   // Live streams carry their own clock: the model's rate wins only when it states one.
@@ -241,6 +267,9 @@ bool OnlineEstimator::update() {
     EsOptions es_options = options_.es;
     es_options.refine_period = 0;
     es_ = std::make_unique<EvolutionStrategy>(ParameterSpace(model, window_data), es_options);
+    use_output_error_ = options_.cost == CostChoice::kOutputError ||
+                        (options_.cost == CostChoice::kAuto &&
+                         estimateMarkerNoise(window_data) >= options_.auto_noise_threshold_m);
     if (options_.resume_from_model_values) {
       std::vector<double> values;
       for (size_t k = 0; k < es_->space().size(); ++k) {
@@ -272,7 +301,7 @@ bool OnlineEstimator::update() {
       es_->generation() >= es_options.refine_start_generation &&
       (last_refine_generation_ < 0 ||
        es_->generation() - last_refine_generation_ >= es_options.refine_period))
-    startRefinement(cost);
+    startRefinement(cost, model, window_data);
 
   Estimate e;
   e.valid = true;
@@ -287,6 +316,9 @@ bool OnlineEstimator::update() {
   e.local_costs = es_->best().local_costs;
   e.refinements = refinements_done_;
   e.last_refine_status = last_refine_status_;
+  e.estimator = "short_term";
+  std::vector<double> genes = es_->best().genes;
+  const bool from_output_error = use_output_error_ && output_error_.ran;
   // 1-sigma from the spread of the elite (best fifth) of the population: cheap enough to do
   // at every update, unlike the Hessian used offline.
   std::vector<const Individual*> sorted;
@@ -306,6 +338,22 @@ bool OnlineEstimator::update() {
       for (size_t j = 0; j < used; ++j) sq += (values[j][k] - mean) * (values[j][k] - mean);
       e.std_devs[k] = std::sqrt(sq / (used - 1));
     }
+  }
+  if (from_output_error) {
+    // The published values are the output-error fit's, with its std (from its Jacobian).
+    e.estimator = "output_error";
+    e.values = output_error_.values;
+    e.std_devs = output_error_.std_devs;
+    e.global_cost = output_error_.observation_cost_m2;
+    e.noise_std_m = output_error_.noise_std_m;
+    genes = output_error_.genes;
+  }
+  e.parameter_flags.assign(e.values.size(), "");
+  for (size_t k = 0; k < es_->space().size(); ++k) {
+    const int side = es_->space().boundSide(k, genes[k]);
+    if (side < 0) e.parameter_flags[k] = "at_lower_bound";
+    else if (side > 0) e.parameter_flags[k] = "at_upper_bound";
+    else if (from_output_error && output_error_.unidentifiable[k]) e.parameter_flags[k] = "unidentifiable";
   }
   // Stability: a long rollout of the best model from the window start stays bounded (finite
   // and within 10x the window's extent around its centre).

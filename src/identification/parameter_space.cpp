@@ -236,6 +236,15 @@ void ParameterSpace::setBounds(size_t k, double lower, double upper) {
                       g.breakpoints.end());
 }
 
+int ParameterSpace::boundSide(size_t k, double gene) const {
+  const Gene& g = genes_.at(k);
+  constexpr double kShare = 0.01;
+  const double tolerance = g.log_scale ? std::log1p(kShare) : kShare * (g.upper - g.lower);
+  if (gene - g.lower <= tolerance) return -1;
+  if (g.upper - gene <= tolerance) return 1;
+  return 0;
+}
+
 std::vector<ParamRef> ParameterSpace::refs() const {
   std::vector<ParamRef> out;
   for (const Gene& g : genes_) out.push_back(g.ref);

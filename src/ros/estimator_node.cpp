@@ -114,6 +114,17 @@ EstimatorNodeOptions readEstimatorOptions(const ros::NodeHandle& pnh) {
           "~min_frames must be in [3, ~window_frames]");
   read(pnh, "generations_per_update", &e.generations_per_update);
   require(e.generations_per_update >= 1, "~generations_per_update must be >= 1");
+  read(pnh, "update_budget_sec", &e.update_budget_s);
+  require(e.update_budget_s > 0.0 && std::isfinite(e.update_budget_s),
+          "~update_budget_sec must be > 0");
+  read(pnh, "refine_max_sec", &e.refine_max_s);
+  require(e.refine_max_s > 0.0 && std::isfinite(e.refine_max_s), "~refine_max_sec must be > 0");
+  std::string cost = costChoiceName(e.cost);
+  read(pnh, "cost", &cost);
+  require(parseCostChoice(cost, &e.cost),
+          "~cost must be auto, short_term or output_error, got '" + cost + "'");
+  read(pnh, "segment_frames", &e.output_error.segment_frames);
+  require(e.output_error.segment_frames >= 2, "~segment_frames must be >= 2");
   read(pnh, "population", &e.es.population);
   require(e.es.population >= 2, "~population must be >= 2");
   e.es.offspring = e.es.population;
@@ -419,6 +430,9 @@ void EstimatorNode::onPublishTimer(const ros::WallTimerEvent&) {
     msg.values = e.values;
     msg.std_devs = e.std_devs;
     msg.stable = e.stable;
+    msg.estimator = e.estimator;
+    msg.parameter_flags = e.parameter_flags;
+    msg.noise_std_m = e.noise_std_m;
     estimate_pub_.publish(msg);
   }
   if (options_.publish_markers) {
@@ -486,7 +500,9 @@ std::string EstimatorNode::exportYaml(const Estimate& e) const {
     same_parameters = refs[k].name == e.parameter_names[k];
   if (same_parameters) setValues(model, refs, e.values);
   IdentificationInfo info;
-  info.method = "es-online";
+  info.method = e.estimator == "output_error" ? "es-online+output_error" : "es-online";
+  for (size_t k = 0; k < e.parameter_names.size() && k < e.parameter_flags.size(); ++k)
+    if (!e.parameter_flags[k].empty()) info.flags.emplace_back(e.parameter_names[k], e.parameter_flags[k]);
   info.global_cost = e.global_cost;
   info.frames = static_cast<int>(e.window_frames);
   info.generations = static_cast<int>(e.generation);

@@ -17,6 +17,8 @@
 #include "motion_model_estimation/core/model.h"
 #include "motion_model_estimation/core/trajectory.h"
 #include "motion_model_estimation/identification/evolution_strategy.h"
+#include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/identification/output_error.h"
 
 namespace mme {
 
@@ -35,6 +37,12 @@ struct OnlineEstimatorOptions {
   /// [s] a refinement running beside the generations stops after this long (its best so far is
   /// handed over as usual).
   double refine_max_s = 10.0;
+  /// Which cost gives the published estimate (identifier.h): kAuto picks the output-error
+  /// estimator when the first window's estimated marker noise reaches auto_noise_threshold_m.
+  /// It runs beside the generations after each refinement, warm-started from its last answer.
+  CostChoice cost = CostChoice::kAuto;
+  double auto_noise_threshold_m = 1e-7;
+  OutputErrorOptions output_error;
   double stability_rollout_factor = 10.0;  ///< stability rollout length / window length
   /// Start the population at the model's values of the free parameters when all have one
   /// (resuming an autosaved model) instead of the paper's random initialisation.
@@ -50,6 +58,12 @@ struct Estimate {
   /// ended ("" before the first).
   uint32_t refinements = 0;
   std::string last_refine_status;
+  /// The cost of the published values: "short_term" (the population's best on this window) or
+  /// "output_error" (the last output-error fit, on the window it ran on).
+  std::string estimator;
+  /// Per parameter: "" | "at_lower_bound" | "at_upper_bound" | "unidentifiable".
+  std::vector<std::string> parameter_flags;
+  double noise_std_m = 0.0;         ///< output error: the marker noise its residuals show
   bool valid = false;               ///< false until the first update
   uint32_t generation = 0;
   uint64_t evaluations = 0;
@@ -133,7 +147,8 @@ class OnlineEstimator {
   struct BackgroundRefinement;
   /// Hands a finished refinement's answer to the population; starts the next one when due.
   void handOverRefinement();
-  void startRefinement(std::shared_ptr<const Cost> cost);
+  void startRefinement(std::shared_ptr<const Cost> cost, const Model& model,
+                       const Trajectory& window);
   void stopRefinement();
 
   mutable std::mutex update_mutex_;  // guards es_, es_version_ and refinement_ (held through update())
@@ -144,6 +159,8 @@ class OnlineEstimator {
   int last_refine_generation_ = -1;  // es_'s generation when the last refinement started
   uint32_t refinements_done_ = 0;
   std::string last_refine_status_;
+  bool use_output_error_ = false;   // decided when the population starts
+  OutputErrorResult output_error_;  // the last output-error fit (ran = false before the first)
   mutable std::mutex estimate_mutex_;  // guards estimate_ (readers never wait for an update)
   Estimate estimate_;
 };

@@ -70,6 +70,9 @@ class ParameterSpace {
   /// Replaces gene k's search-space bounds (e.g. a default bound widened after the answer
   /// reached it). Breakpoints outside them are dropped. Throws InputError when empty.
   void setBounds(size_t k, double lower, double upper);
+  /// -1 when gene k's value `gene` lies within 1 % of its lower bound (1 % of the value for log
+  /// genes, of the range for linear ones), +1 within 1 % of its upper bound, 0 inside.
+  int boundSide(size_t k, double gene) const;
   /// Clamps a gene into its bounds by reflection (keeps the search distribution symmetric).
   double reflect(size_t k, double gene_value) const;
   /// Draws gene k from the paper's initialisation (rest lengths around the average observed
