@@ -19,6 +19,7 @@
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/identification/output_error.h"
 #include "motion_model_estimation/io/model_yaml.h"
 #include "motion_model_estimation/io/trajectory_io.h"
 #include "motion_model_estimation/io/trc.h"
@@ -298,6 +299,70 @@ void defaultsExperiment(const Settings& s) {
   std::fclose(f);
 }
 
+/// Accuracy under noise against the Cramer-Rao bound (issue 14): paper_object, 100 frames, the
+/// default engine (identify's defaults: the output-error estimator on noisy data), seeds 1..N
+/// per noise level. Per run: median and max error, the bound's median and max, how many
+/// parameters lie within 3 reported std, the largest std / bound ratio.
+void accuracyExperiment(const Settings& s) {
+  std::FILE* f = openCsv(s.out_dir + "/accuracy.csv",
+                         "noise_std_m,seed,estimator,median_error_percent,max_error_percent,"
+                         "bound_median_percent,bound_max_percent,within_3std,parameters,"
+                         "max_std_over_bound,noise_estimate_m,wall_s");
+  const mme::Scene scene = mme::makeScene("paper_object");
+  const mme::Trajectory clean = mme::simulateTrajectory(scene.model, 100, scene.model.frame_rate_hz);
+  const std::vector<double> truth = mme::getValues(scene.model, mme::freeParameters(scene.model));
+  const int seeds = s.quick ? 2 : 20;
+  for (double noise : {1e-5, 1e-4, 1e-3}) {
+    const mme::ParameterSpace space(scene.model, clean);
+    const std::vector<double> bound = mme::cramerRaoBound(scene.model, clean, space, noise);
+    std::vector<double> bound_pct;
+    for (size_t k = 0; k < bound.size(); ++k) bound_pct.push_back(100.0 * bound[k] / std::abs(truth[k]));
+    Errors b;  // the bound's median and max [%]
+    {
+      std::vector<double> sorted = bound_pct;
+      std::sort(sorted.begin(), sorted.end());
+      const size_t m = sorted.size();
+      b.median = m % 2 ? sorted[m / 2] : 0.5 * (sorted[m / 2 - 1] + sorted[m / 2]);
+      b.max = sorted.back();
+    }
+    std::vector<double> medians, maxima;
+    int within = 0, total = 0;
+    double worst_ratio = 0.0;
+    for (int seed = 1; seed <= seeds; ++seed) {
+      mme::Trajectory data = clean;
+      mme::addGaussianNoise(&data, noise, 500 + seed);
+      mme::IdentifyOptions o = mme::identifyOptionsFor(mme::Preset::kDefault);
+      o.es.threads = s.threads;
+      o.es.seed = s.seed;
+      const RunResult r = runEs(scene.model, data, o, nullptr);
+      int run_within = 0;
+      double ratio = 0.0;
+      for (size_t k = 0; k < truth.size(); ++k) {
+        const double sd = r.result.std_devs[k];
+        if (std::isfinite(sd) && std::abs(r.result.values[k] - truth[k]) <= 3.0 * sd) ++run_within;
+        if (std::isfinite(sd) && bound[k] > 0.0) ratio = std::max(ratio, sd / bound[k]);
+      }
+      within += run_within;
+      total += static_cast<int>(truth.size());
+      worst_ratio = std::max(worst_ratio, ratio);
+      medians.push_back(r.errors.median);
+      maxima.push_back(r.errors.max);
+      std::fprintf(f, "%g,%d,%s,%.6g,%.6g,%.6g,%.6g,%d,%zu,%.4g,%.4g,%.3f\n", noise, seed,
+                   r.result.estimator.c_str(), r.errors.median, r.errors.max, b.median, b.max,
+                   run_within, truth.size(), ratio, r.result.noise_estimate_m, r.result.wall_time_s);
+      std::fflush(f);
+    }
+    std::sort(medians.begin(), medians.end());
+    std::printf("accuracy: noise %g m, %d seeds: median of median errors %.4f %% (bound median "
+                "%.4f %%, ratio %.2f), worst max error %.4f %% (bound max %.4f %%); |error| <= 3 std "
+                "for %d of %d parameters (%.1f %%); largest std / bound %.2f\n",
+                noise, seeds, medians[medians.size() / 2], b.median,
+                medians[medians.size() / 2] / b.median, *std::max_element(maxima.begin(), maxima.end()),
+                b.max, within, total, 100.0 * within / total, worst_ratio);
+  }
+  std::fclose(f);
+}
+
 int compare(const std::string& truth_path, const std::string& estimate_path) {
   const Model truth = mme::loadModelFile(truth_path);
   const Model estimate = mme::loadModelFile(estimate_path);
@@ -342,7 +407,7 @@ int main(int argc, char** argv) {
       else if (a == "--seed" && i + 1 < argc) s.seed = std::strtoull(argv[++i], nullptr, 10);
       else {
         std::fprintf(stderr, "usage: bench_paper [--quick] [--out-dir DIR] [--threads T] "
-                             "[--only fig1,table1,table2,scaling,random18,defaults]\n"
+                             "[--only fig1,table1,table2,scaling,random18,defaults,accuracy]\n"
                              "       [--generations N] [--refine-start G] [--refine-period G]\n"
                              "       [--refine-evaluations E] [--refine ALGORITHM] [--seed S]\n"
                              "       [--preset paper|default] (default: paper)\n"
@@ -356,6 +421,7 @@ int main(int argc, char** argv) {
                         "wall_s,global_cost");
     if (s.wants("random18")) randomObjectFiles(s);
     if (s.wants("defaults")) defaultsExperiment(s);
+    if (s.wants("accuracy")) accuracyExperiment(s);
     if (s.wants("table1")) table1(s);
     if (s.wants("fig1")) figure1(s);
     if (s.wants("table2")) table2(s);

@@ -1,8 +1,10 @@
 // soak_publisher: drives the estimator_node soak test (scripts/soak, docs/reliability.md).
 //
-//   soak_publisher --write-model PATH [--particles 43] [--seed 1]
+//   soak_publisher --write-model PATH [--particles 43] [--bonds 86] [--bond-types 12]
+//                  [--damping-max C] [--seed 1]
 //       writes a random floating object (mme::makeRandomObject, 120 Hz) as a model file whose
-//       free parameters carry their true values, and exits.
+//       free parameters carry their true values, and exits. --damping-max > 0 gives every type a
+//       free damping too (the big soak model: 91 bonds of 91 types, 273 free parameters).
 //   soak_publisher --model PATH --minutes M --estimator-pid PID --csv FILE --summary FILE
 //                  [--estimator NS (/estimator)] [--clip-seconds 60] [--seed 1]
 //       simulates a clip of the model and publishes it as MarkerFrame on `markers` at the
@@ -48,6 +50,9 @@ namespace {
 struct Args {
   std::string write_model, model, estimator = "/estimator", csv, summary;
   int particles = 43;
+  int bonds = 0;        // 0 = 2 x particles
+  int bond_types = 12;
+  double damping_max_nspm = 0.0;
   double minutes = 10.0, clip_seconds = 60.0;
   long estimator_pid = 0;
   uint64_t seed = 1;
@@ -109,8 +114,9 @@ struct Observed {
 int writeModel(const Args& a) {
   mme::RandomObjectSpec spec;
   spec.particles = a.particles;
-  spec.bond_types = 12;
-  spec.bonds = 2 * a.particles;
+  spec.bond_types = a.bond_types;
+  spec.bonds = a.bonds > 0 ? a.bonds : 2 * a.particles;
+  spec.damping_max_nspm = a.damping_max_nspm;
   spec.frame_rate_hz = 120.0;
   spec.seed = a.seed;
   mme::writeModelFile(a.write_model, mme::makeRandomObject(spec));
@@ -425,6 +431,9 @@ int main(int argc, char** argv) {
     if (o == "--write-model") a.write_model = next();
     else if (o == "--model") a.model = next();
     else if (o == "--particles") a.particles = std::stoi(next());
+    else if (o == "--bonds") a.bonds = std::stoi(next());
+    else if (o == "--bond-types") a.bond_types = std::stoi(next());
+    else if (o == "--damping-max") a.damping_max_nspm = std::stod(next());
     else if (o == "--seed") a.seed = std::stoull(next());
     else if (o == "--minutes") a.minutes = std::stod(next());
     else if (o == "--clip-seconds") a.clip_seconds = std::stod(next());
