@@ -1001,13 +1001,12 @@ void summary(const Settings& s, double total_wall_s) {
         const std::string& v = values[pos];
         md << "| " << v << " |";
         for (const std::string& m : columns) {
-          int runs = 0, ok = 0, bounded = 0;
-          bool applicable = true;
+          int runs = 0, ok = 0, bounded = 0, not_applicable = 0;
           std::vector<double> ev, wall;
           for (const Row& r : st) {
             if (r.at("axis") != axis || r.at("value") != v || r.at("method") != m) continue;
             ++runs;
-            applicable = r.at("applicable") == "1";
+            not_applicable += r.at("applicable") != "1";
             ok += r.at("success") == "1";
             bounded += r.at("bounded") == "1";
             if (r.at("success") == "1") ev.push_back(toD(r, "evals_to_1pct"));
@@ -1017,12 +1016,12 @@ void summary(const Settings& s, double total_wall_s) {
             md << " |";
             continue;
           }
-          if (!applicable) {
+          if (not_applicable == runs) {
             md << " n/a |";
             rates_csv << axis << "," << v << "," << pos << "," << m << "," << runs << ",0,n/a,n/a,n/a,n/a\n";
             continue;
           }
-          md << " " << ok << "/" << runs << " |";
+          md << " " << ok << "/" << runs << (not_applicable ? " (" + std::to_string(not_applicable) + " n/a)" : "") << " |";
           rates_csv << axis << "," << v << "," << pos << "," << m << "," << runs << "," << ok << ","
                     << num(static_cast<double>(ok) / runs) << "," << num(static_cast<double>(bounded) / runs)
                     << "," << num(median(ev)) << "," << num(median(wall)) << "\n";

@@ -627,6 +627,16 @@ bool solveEquationError(const Problem& p, std::vector<double>* values, std::stri
 RunResult runMethod(const std::string& method, const Problem& problem, uint64_t seed,
                     const Budget& budget, bool keep_trace) {
   RunResult r;
+  if (method != "default" && method != "lls" && problem.cost->termCount() == 0) {
+    // Occlusion left no (particle, frame) term of the one-step cost (each needs three frames of
+    // a particle and two of its neighbours): the cost is zero everywhere, nothing to minimise.
+    r.method = method;
+    r.applicable = false;
+    r.note = "n/a: the one-step cost has no terms (occlusion)";
+    r.values.assign(problem.space->size(), std::numeric_limits<double>::quiet_NaN());
+    r.errors.median = r.errors.max = std::numeric_limits<double>::quiet_NaN();
+    return r;
+  }
   if (method == "default") r = runDefault(problem, seed, budget, keep_trace);
   else if (method == "es_local") r = runEs(problem, seed, budget, keep_trace, true, Schedule::kPaper);
   else if (method == "es_early")

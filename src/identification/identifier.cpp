@@ -89,6 +89,8 @@ namespace {
 constexpr double kWidenFactor = 10.0;
 /// A one-step fit with an RMS residual below this [m] is exact: the data hold no noise to filter.
 constexpr double kExactFitRms_m = 1e-9;
+/// The one-step cost is starved when its terms are fewer than this share of the observed samples.
+constexpr double kStarvedShare = 0.5;
 /// Most substeps per frame the stiff-scene rule asks for.
 constexpr int kMaxSubsteps = 64;
 
@@ -217,9 +219,7 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
   auto elapsed = [&start]() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
-  std::string note_prefix;  // names a trial whose notes may be discarded
-  const auto note = [&](const std::string& raw, int generation, uint64_t evaluations) {
-    const std::string text = note_prefix + raw;
+  const auto note = [&](const std::string& text, int generation, uint64_t evaluations) {
     notes.push_back(text);
     if (!progress) return;
     Progress p;
@@ -331,52 +331,6 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
     return stiffestModeRadPerS(m, reference) * h;
   };
   double omega_h = omegaH(es->bestValues());
-  if (options.max_omega_h_per_substep > 0.0 && stop != IdentifyStop::kWallTime &&
-      trajectory.numFrames() >= 3 && omega_h / model.substeps > options.max_omega_h_per_substep) {
-    const int needed = std::min(
-        kMaxSubsteps, static_cast<int>(std::ceil(omega_h / options.max_omega_h_per_substep)));
-    if (needed > model.substeps && generations_done < options.generations) {
-      // Decided by the data: the finer integrator is kept only when it predicts the frames
-      // clearly better (data made by a coarse integrator, e.g. a simulation, keep theirs).
-      const int before = model.substeps;
-      const double cost_before = es->best().cost;
-      const std::vector<double> genes_before = es->best().genes;
-      std::unique_ptr<EvolutionStrategy> es_before = std::move(es);
-      const std::shared_ptr<ShortTermCost> cost_before_ptr = cost;
-      model.substeps = needed;
-      cost = std::make_shared<ShortTermCost>(model, trajectory);
-      seeds.insert(seeds.begin(), genes_before);
-      const IdentifyStop stop_before = stop;
-      const ParameterSpace space_before = space;
-      const size_t notes_before = notes.size();
-      const int widenings_before = widenings;
-      note_prefix = "(trying " + std::to_string(needed) + " substeps per frame) ";
-      if (cost->termCount() > 0) search();
-      note_prefix.clear();
-      if (es && es->best().cost < 0.5 * cost_before) {
-        omega_h = omegaH(es->bestValues());
-        note("the stiffest mode has omega*h = " + formatValue(omega_h) + " per frame: with " +
-                 std::to_string(needed) + " substeps per frame instead of " +
-                 std::to_string(before) + " the prediction fits the frames better (one-step cost " +
-                 formatValue(es->best().cost) + " against " + formatValue(cost_before) +
-                 " m^2): kept",
-             generations_done, evaluations_done);
-      } else {
-        model.substeps = before;
-        cost = cost_before_ptr;
-        es = std::move(es_before);
-        stop = stop_before;
-        seeds.erase(seeds.begin());
-        space = space_before;  // what the discarded search widened goes with it
-        notes.resize(notes_before);
-        widenings = widenings_before;
-        note("the stiffest mode has omega*h = " + formatValue(omega_h) + " per frame; " +
-                 std::to_string(needed) + " substeps per frame did not fit the frames better than " +
-                 std::to_string(before) + ": kept " + std::to_string(before),
-             generations_done, evaluations_done);
-      }
-    }
-  }
 
   IdentifyResult r;
   r.parameters = space.refs();
@@ -390,10 +344,23 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
   // Auto: the output error when the markers look noisy and the one-step fit is not exact (a
   // fit to round-off means noiseless data the one-step model explains: nothing to gain).
   const double fit_rms_m = std::sqrt(r.global_cost / std::max<double>(1.0, cost->residualCount()));
+  // Also when the one-step cost leaves out most observed samples (each of its terms needs three
+  // frames of a particle and two of its neighbours): occlusion then starves it, an exact fit of
+  // a few terms can be wrong, and the output error uses every sample.
+  size_t observed = 0;
+  for (int t = 0; t < trajectory.numFrames(); ++t)
+    for (int i = 0; i < trajectory.numMarkers(); ++i)
+      observed += !model.particles[i].fixed && !trajectory.isOccluded(t, i);
+  const bool starved = trajectory.numFrames() >= 3 &&
+                       static_cast<double>(cost->termCount()) < kStarvedShare * static_cast<double>(observed);
   const bool output_error =
       options.cost == CostChoice::kOutputError ||
-      (options.cost == CostChoice::kAuto && r.noise_estimate_m >= options.auto_noise_threshold_m &&
-       fit_rms_m >= kExactFitRms_m);
+      (options.cost == CostChoice::kAuto &&
+       (starved || (r.noise_estimate_m >= options.auto_noise_threshold_m && fit_rms_m >= kExactFitRms_m)));
+  if (output_error && options.cost == CostChoice::kAuto && starved)
+    note("the one-step cost uses " + std::to_string(cost->termCount()) + " of " +
+             std::to_string(observed) + " observed samples (occlusion): the output error uses all",
+         generations_done, evaluations_done);
   if (output_error && stop != IdentifyStop::kWallTime) {
     // From the search's answer and from the smoothed equation-error solutions (the one-step
     // optimum is biased by noise, badly so at a millimetre); the lowest output-error cost wins.
@@ -414,19 +381,48 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
       starts.push_back(g);
     }
     OutputErrorResult best_oe;
-    for (const std::vector<double>& from : starts) {
+    const auto fit = [&](const Model& m, const std::vector<double>& from) {
       OutputErrorOptions o = options.output_error;
       o.threads = std::max(o.threads, options.es.threads);
       if (options.max_wall_time_s > 0.0) {
         const double left = options.max_wall_time_s - elapsed();
-        if (left <= 0.0) break;
+        if (left <= 0.0) return OutputErrorResult();
         o.max_time_s = o.max_time_s > 0.0 ? std::min(o.max_time_s, left) : left;
       }
       o.estimate_std = false;
-      const OutputErrorResult oe = estimateOutputError(model, trajectory, space, from, o);
+      return estimateOutputError(m, trajectory, space, from, o);
+    };
+    for (const std::vector<double>& from : starts) {
+      const OutputErrorResult oe = fit(model, from);
       if (oe.ran && (!best_oe.ran || oe.observation_cost_m2 < best_oe.observation_cost_m2)) best_oe = oe;
       // A fit as good as the noise allows needs no other start.
       if (best_oe.ran && best_oe.noise_std_m <= 1.2 * best_oe.noise_std_prior_m) break;
+    }
+    // Stiff scenes: semi-implicit Euler drifts as (omega h)^2; a finer integrator is kept when
+    // the simulated motion fits the frames clearly better (data made by a coarse integrator,
+    // e.g. a simulation with one step per frame, keep theirs).
+    if (best_oe.ran) omega_h = omegaH(best_oe.values);
+    if (best_oe.ran && options.max_omega_h_per_substep > 0.0 &&
+        omega_h / model.substeps > options.max_omega_h_per_substep) {
+      const int needed = std::min(
+          kMaxSubsteps, static_cast<int>(std::ceil(omega_h / options.max_omega_h_per_substep)));
+      if (needed > model.substeps) {
+        Model finer = model;
+        finer.substeps = needed;
+        const OutputErrorResult oe = fit(finer, best_oe.genes);
+        const bool better = oe.ran && oe.observation_cost_m2 < 0.5 * best_oe.observation_cost_m2;
+        note("the stiffest mode has omega*h = " + formatValue(omega_h) + " per frame: " +
+                 std::to_string(needed) + " substeps per frame fit the frames " +
+                 (better ? "better" : "no better") + " than " + std::to_string(model.substeps) +
+                 " (output-error cost " + formatValue(oe.observation_cost_m2) + " against " +
+                 formatValue(best_oe.observation_cost_m2) + " m^2): " +
+                 (better ? "the model now uses " + std::to_string(needed) : "kept " + std::to_string(model.substeps)),
+             generations_done, evaluations_done);
+        if (better) {
+          model = finer;
+          best_oe = oe;
+        }
+      }
     }
     if (best_oe.ran) {
       OutputErrorOptions o = options.output_error;

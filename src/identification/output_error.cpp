@@ -61,23 +61,30 @@ struct Problem {
   int stateSize() const { return 6 * static_cast<int>(free_particles.size()); }
 };
 
-/// One shooting segment: frames [first, last]; observations at first..last-1 (and at last for
-/// the final segment); continuity at `last` with the next segment's state when there is one.
+/// One part of a shooting segment (frames [first, last]): its observations (at first..last-1,
+/// and at last for the final segment; parameter blocks theta and the segment's state) or its
+/// continuity with the next segment's state (blocks theta, the state and the next state). The
+/// two are separate residual blocks so that the dense Jacobian blocks stay small: the next
+/// state touches only the continuity rows (each part simulates the segment, which is cheap).
 class SegmentCost final : public ceres::CostFunction {
  public:
-  SegmentCost(const Problem* p, int first, int last, bool has_next)
-      : p_(p), first_(first), last_(last), has_next_(has_next), sim_(p->model) {
+  enum class Part { kObservations, kContinuity };
+
+  SegmentCost(const Problem* p, int first, int last, bool has_next, Part part)
+      : p_(p), first_(first), last_(last), has_next_(has_next), part_(part), sim_(p->model) {
     observed_ = 0;
     const int end = has_next ? last : last + 1;
     for (int t = first; t < end; ++t)
       for (int i : p->free_particles) observed_ += p->obs.isOccluded(t, i) ? 0 : 1;
-    set_num_residuals(3 * observed_ + (has_next ? p->stateSize() : 0));
+    const bool continuity = part == Part::kContinuity;
+    set_num_residuals(continuity ? p->stateSize() : 3 * observed_);
     mutable_parameter_block_sizes()->push_back(static_cast<int32_t>(p->smooth.size()));
     mutable_parameter_block_sizes()->push_back(p->stateSize());
-    if (has_next) mutable_parameter_block_sizes()->push_back(p->stateSize());
+    if (continuity) mutable_parameter_block_sizes()->push_back(p->stateSize());
+    full_.resize(3 * observed_ + (has_next ? p->stateSize() : 0));
   }
 
-  int observedSamples() const { return observed_; }
+  int observedSamples() const { return part_ == Part::kObservations ? observed_ : 0; }
 
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override {
@@ -85,8 +92,8 @@ class SegmentCost final : public ceres::CostFunction {
     const int np = static_cast<int>(p_->smooth.size()), ns = p_->stateSize();
     const double* theta = parameters[0];
     const double* state = parameters[1];
-    const double* next = has_next_ ? parameters[2] : nullptr;
-    if (!simulate(theta, state, next, residuals)) return false;
+    const double* next = part_ == Part::kContinuity ? parameters[2] : nullptr;
+    if (!part(theta, state, next, residuals)) return false;
     if (!jacobians) return true;
     std::vector<double> perturbed(m);
     if (jacobians[0]) {
@@ -96,7 +103,7 @@ class SegmentCost final : public ceres::CostFunction {
         double step = 1e-7 * std::max({std::fabs(th[j]), 1e-3 * (g.upper - g.lower), 1e-8});
         if (th[j] + step > g.upper) step = -step;
         th[j] += step;
-        const bool ok = simulate(th.data(), state, next, perturbed.data());
+        const bool ok = part(th.data(), state, next, perturbed.data());
         th[j] = theta[j];
         for (int r = 0; r < m; ++r)
           jacobians[0][r * np + j] = ok ? (perturbed[r] - residuals[r]) / step : 0.0;
@@ -107,26 +114,38 @@ class SegmentCost final : public ceres::CostFunction {
       for (int j = 0; j < ns; ++j) {
         const double step = 1e-7 * std::max(std::fabs(st[j]), 1e-2);
         st[j] += step;
-        const bool ok = simulate(theta, st.data(), next, perturbed.data());
+        const bool ok = part(theta, st.data(), next, perturbed.data());
         st[j] = state[j];
         for (int r = 0; r < m; ++r)
           jacobians[1][r * ns + j] = ok ? (perturbed[r] - residuals[r]) / step : 0.0;
       }
     }
-    if (has_next_ && jacobians[2]) {
+    if (part_ == Part::kContinuity && jacobians[2]) {
       std::fill(jacobians[2], jacobians[2] + static_cast<size_t>(m) * ns, 0.0);
-      const int offset = 3 * observed_;
-      for (int j = 0; j < ns; ++j) jacobians[2][(offset + j) * ns + j] = -p_->w_cont;
+      for (int j = 0; j < ns; ++j) jacobians[2][j * ns + j] = -p_->w_cont;
     }
     return true;
   }
 
+  /// This part's residuals (a slice of simulate()'s).
+  bool part(const double* theta, const double* state, const double* next, double* out) const {
+    const bool ok = simulate(theta, state, next, full_.data());
+    if (part_ == Part::kObservations) std::copy(full_.begin(), full_.begin() + 3 * observed_, out);
+    else std::copy(full_.begin() + 3 * observed_, full_.end(), out);
+    return ok;
+  }
+
   /// Residuals of the segment for theta (smooth genes), its start state and the next one's.
   bool simulate(const double* theta, const double* state, const double* next, double* out) const {
-    std::vector<double> genes = p_->base_genes;
-    for (size_t j = 0; j < p_->smooth.size(); ++j) genes[p_->smooth[j]] = theta[j];
-    setValues(model_, p_->refs, p_->space->toPhysical(genes));
-    sim_.setParameters(model_);
+    // The state columns of a Jacobian keep theta: the simulator's parameters are set only when
+    // theta changed since the last call.
+    if (!std::equal(theta, theta + p_->smooth.size(), theta_set_.begin(), theta_set_.end())) {
+      std::vector<double> genes = p_->base_genes;
+      for (size_t j = 0; j < p_->smooth.size(); ++j) genes[p_->smooth[j]] = theta[j];
+      setValues(model_, p_->refs, p_->space->toPhysical(genes));
+      sim_.setParameters(model_);
+      theta_set_.assign(theta, theta + p_->smooth.size());
+    }
     const int n = p_->obs.particles;
     State s;
     s.x_m.resize(n);
@@ -156,7 +175,10 @@ class SegmentCost final : public ceres::CostFunction {
       if (t < last_ || !has_next_) observe(t);
     }
     if (has_next_) {
-      // Continuity in the state's own order: x x x, v h v h v h per particle.
+      // Continuity in the state's own order: x x x, v h v h v h per particle (zero next state
+      // when only the observations are asked for: those rows are not used then).
+      static const std::vector<double> kZero(p_->stateSize(), 0.0);
+      if (!next) next = kZero.data();
       for (size_t f = 0; f < p_->free_particles.size(); ++f) {
         const int i = p_->free_particles[f];
         for (int c = 0; c < 3; ++c) out[r + 6 * f + c] = p_->w_cont * (s.x_m[i][c] - next[6 * f + c]);
@@ -164,7 +186,7 @@ class SegmentCost final : public ceres::CostFunction {
           out[r + 6 * f + 3 + c] = p_->w_cont * (s.v_mps[i][c] * h - next[6 * f + 3 + c]);
       }
     }
-    for (int k = 0; k < num_residuals(); ++k)
+    for (size_t k = 0; k < full_.size(); ++k)
       if (!std::isfinite(out[k])) return false;
     return true;
   }
@@ -173,9 +195,12 @@ class SegmentCost final : public ceres::CostFunction {
   const Problem* p_;
   int first_, last_;
   bool has_next_;
+  Part part_;
   int observed_ = 0;
+  mutable std::vector<double> full_;  // simulate()'s residuals: observations, then continuity
   mutable Model model_ = p_->model;
   mutable Simulator sim_;
+  mutable std::vector<double> theta_set_;  // theta the simulator holds (empty: none yet)
 };
 
 /// Start state of frame t from the data: the position, and the velocity x h from a central
@@ -260,14 +285,18 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
     problem.SetParameterUpperBound(theta.data(), static_cast<int>(j), g.upper);
   }
   for (int s = 0; s < S; ++s) problem.AddParameterBlock(states[s].data(), ns);
-  std::vector<const SegmentCost*> costs;
+  std::vector<const SegmentCost*> costs;  // the observation parts, one per segment
   for (int s = 0; s < S; ++s) {
     const bool has_next = s + 1 < S;
-    auto* cost = new SegmentCost(p.get(), segments[s].first, segments[s].second, has_next);
-    costs.push_back(cost);
-    out.observations += 3 * cost->observedSamples();
-    if (has_next) problem.AddResidualBlock(cost, nullptr, theta.data(), states[s].data(), states[s + 1].data());
-    else problem.AddResidualBlock(cost, nullptr, theta.data(), states[s].data());
+    auto* observations = new SegmentCost(p.get(), segments[s].first, segments[s].second, has_next,
+                                         SegmentCost::Part::kObservations);
+    costs.push_back(observations);
+    out.observations += 3 * observations->observedSamples();
+    problem.AddResidualBlock(observations, nullptr, theta.data(), states[s].data());
+    if (has_next)
+      problem.AddResidualBlock(new SegmentCost(p.get(), segments[s].first, segments[s].second, true,
+                                               SegmentCost::Part::kContinuity),
+                               nullptr, theta.data(), states[s].data(), states[s + 1].data());
   }
   out.segments = S;
   // The observation part of the cost, unweighted [m^2].
@@ -275,10 +304,9 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
     double sum = 0.0;
     for (int s = 0; s < S; ++s) {
       std::vector<double> r(costs[s]->num_residuals());
-      const double* next = s + 1 < S ? states[s + 1].data() : nullptr;
-      if (!costs[s]->simulate(theta.data(), states[s].data(), next, r.data()))
+      if (!costs[s]->part(theta.data(), states[s].data(), nullptr, r.data()))
         return std::numeric_limits<double>::infinity();
-      for (int k = 0; k < 3 * costs[s]->observedSamples(); ++k) sum += r[k] * r[k];
+      for (double v : r) sum += v * v;
     }
     return sum / (p->w_obs * p->w_obs);
   };

@@ -1,0 +1,170 @@
+// The output-error estimator: the noise level from the data, accuracy at the Cramer-Rao bound on
+// a noisy scene, std that means something, occluded samples that simply do not count, and the
+// identifier's choices (which estimator, how many substeps) made from the data.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/core/stiffness.h"
+#include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/identification/output_error.h"
+#include "motion_model_estimation/scenes/scenes.h"
+#include "test_helpers.h"
+
+namespace {
+
+using mme::test::maxRelativeError;
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+std::vector<double> relativeErrors(const std::vector<double>& values, const std::vector<double>& truth) {
+  std::vector<double> e;
+  for (size_t k = 0; k < values.size(); ++k) e.push_back(std::abs(values[k] / truth[k] - 1.0));
+  return e;
+}
+
+struct Noisy {
+  mme::Model truth = mme::makeScene("paper_object").model;
+  mme::Model search = mme::test::withoutValues(truth);
+  mme::Trajectory clean = mme::simulateTrajectory(truth, 100, truth.frame_rate_hz);
+  std::vector<double> true_values = mme::getValues(truth, mme::freeParameters(truth));
+  mme::Trajectory noisy(double sigma, uint64_t seed) const {
+    mme::Trajectory d = clean;
+    mme::addGaussianNoise(&d, sigma, seed);
+    return d;
+  }
+};
+
+TEST(OutputError, MarkerNoiseIsEstimatedFromTheDataAlone) {
+  Noisy n;
+  for (double sigma : {1e-5, 1e-4, 1e-3}) {
+    const double estimate = mme::estimateMarkerNoise(n.noisy(sigma, 3));
+    EXPECT_NEAR(estimate, sigma, 0.1 * sigma) << sigma;
+  }
+  EXPECT_LT(mme::estimateMarkerNoise(n.clean), 1e-7);  // smooth motion: h^4 x'''' only
+}
+
+// From the truth 2 % off, at 0.1 mm of noise on paper_object (100 frames): the median error is
+// within 2x the Cramer-Rao bound's median (0.035 %), every parameter within 1 %, and the
+// reported std are close to the bound and cover the errors.
+TEST(OutputError, ReachesTheCramerRaoBoundOnANoisyScene) {
+  Noisy n;
+  const mme::Trajectory data = n.noisy(1e-4, 7);
+  const mme::ParameterSpace space(n.search, data);
+  std::vector<double> start = space.toSearch(n.true_values);
+  for (size_t k = 0; k < start.size(); ++k) start[k] = space.reflect(k, start[k] + (k % 2 ? 0.02 : -0.02));
+  const mme::OutputErrorResult r = mme::estimateOutputError(n.search, data, space, start);
+  ASSERT_TRUE(r.ran) << r.reason;
+  EXPECT_TRUE(r.converged) << r.termination;
+  const mme::ParameterSpace truth_space(n.truth, n.clean);
+  const std::vector<double> bound = mme::cramerRaoBound(n.truth, n.clean, truth_space, 1e-4);
+  const std::vector<double> errors = relativeErrors(r.values, n.true_values);
+  std::vector<double> bound_rel;
+  for (size_t k = 0; k < bound.size(); ++k) bound_rel.push_back(bound[k] / n.true_values[k]);
+  EXPECT_LT(median(errors), 2.0 * median(bound_rel));
+  EXPECT_LT(*std::max_element(errors.begin(), errors.end()), 0.01);
+  EXPECT_NEAR(r.noise_std_m, 1e-4, 1e-5);
+  int covered = 0;
+  for (size_t k = 0; k < errors.size(); ++k) {
+    ASSERT_TRUE(std::isfinite(r.std_devs[k]));
+    EXPECT_LT(r.std_devs[k], 1.5 * bound[k]) << k;
+    EXPECT_GT(r.std_devs[k], 0.67 * bound[k]) << k;
+    covered += std::abs(r.values[k] - n.true_values[k]) <= 3.0 * r.std_devs[k];
+    EXPECT_FALSE(r.unidentifiable[k]);
+  }
+  EXPECT_GE(covered, 19);
+}
+
+// An occluded sample has no residual: garbage written at occluded positions changes nothing.
+TEST(OutputError, OccludedSamplesDoNotCount) {
+  Noisy n;
+  mme::Trajectory data = n.noisy(1e-4, 9);
+  for (size_t k = 0; k < data.occluded.size(); ++k)
+    if ((k * 2654435761u) % 7 == 0) data.occluded[k] = 1;
+  mme::Trajectory garbage = data;
+  for (size_t k = 0; k < garbage.occluded.size(); ++k)
+    if (garbage.occluded[k]) garbage.positions_m[k] = Eigen::Vector3d(3.0, -2.0, 1.0);
+  const mme::ParameterSpace space(n.search, data);
+  const std::vector<double> start = space.toSearch(n.true_values);
+  mme::OutputErrorOptions o;
+  o.estimate_std = false;
+  const mme::OutputErrorResult a = mme::estimateOutputError(n.search, data, space, start, o);
+  const mme::OutputErrorResult b = mme::estimateOutputError(n.search, garbage, space, start, o);
+  ASSERT_TRUE(a.ran && b.ran);
+  EXPECT_EQ(a.observations, b.observations);
+  EXPECT_LT(maxRelativeError(b.values, a.values), 1e-9);
+  EXPECT_LT(maxRelativeError(a.values, n.true_values), 0.01);
+}
+
+// A parameter the data cannot see (the only bond of its type joins a fixed particle to another
+// fixed one) is flagged, not given a confident number.
+TEST(OutputError, FlagsWhatTheDataCannotDetermine) {
+  Noisy n;
+  mme::Model model = n.truth;
+  mme::test::addParticle(&model, Eigen::Vector3d(1, 1, 1), 1.0, true);
+  mme::test::addParticle(&model, Eigen::Vector3d(1.2, 1, 1), 1.0, true);
+  const int type = mme::test::addType(&model, "idle", mme::BondKind::kSpring,
+                                      {{mme::kStiffness, 5.0}, {mme::kRestLength, 0.15}});
+  mme::test::addBond(&model, type, 15, 16);
+  const mme::Trajectory clean = mme::simulateTrajectory(model, 60, model.frame_rate_hz);
+  mme::Trajectory data = clean;
+  mme::addGaussianNoise(&data, 1e-4, 4);
+  const mme::Model search = mme::test::withoutValues(model);
+  const mme::ParameterSpace space(search, data);
+  const mme::OutputErrorResult r = mme::estimateOutputError(
+      search, data, space, space.toSearch(mme::getValues(model, mme::freeParameters(model))));
+  ASSERT_TRUE(r.ran);
+  const size_t n_params = r.values.size();
+  EXPECT_TRUE(r.unidentifiable[n_params - 2]);  // idle/stiffness
+  EXPECT_TRUE(r.unidentifiable[n_params - 1]);  // idle/rest_length
+  EXPECT_TRUE(std::isnan(r.std_devs[n_params - 1]));
+  for (size_t k = 0; k + 2 < n_params; ++k) EXPECT_FALSE(r.unidentifiable[k]) << k;
+}
+
+// identify's choice of estimator: the output error on noisy markers (and says so); the one-step
+// cost on noiseless ones, where it is exact.
+TEST(OutputError, TheIdentifierPicksTheEstimatorFromTheData) {
+  Noisy n;
+  mme::IdentifyOptions options = mme::identifyOptionsFor(mme::Preset::kDefault);
+  options.estimate_std = false;
+  const mme::IdentifyResult noisy = mme::identifyModel(n.search, n.noisy(1e-4, 5), options);
+  EXPECT_EQ(noisy.estimator, "output_error");
+  EXPECT_NEAR(noisy.noise_estimate_m, 1e-4, 1e-5);
+  EXPECT_LT(maxRelativeError(noisy.values, n.true_values), 0.01);
+  const mme::IdentifyResult clean = mme::identifyModel(n.search, n.clean, options);
+  EXPECT_EQ(clean.estimator, "short_term");
+  EXPECT_LT(maxRelativeError(clean.values, n.true_values), 1e-8);
+  options.cost = mme::CostChoice::kShortTerm;
+  EXPECT_EQ(mme::identifyModel(n.search, n.noisy(1e-4, 5), options).estimator, "short_term");
+}
+
+// A stiff scene (omega h = 0.5, the data integrated with 20 substeps per frame, the model file
+// with 1): the identifier finds that a finer integrator fits the frames better, uses it, says so,
+// and gets every parameter within 1 % (with one step per frame the one-step cost is 2 % off).
+TEST(OutputError, StiffScenesGetMoreSubstepsAutomatically) {
+  mme::Model truth = mme::makeScene("paper_object").model;
+  std::vector<Eigen::Vector3d> x;
+  for (const mme::Particle& p : truth.particles) x.push_back(p.position_m);
+  truth.frame_rate_hz = mme::stiffestModeRadPerS(truth, x) / 0.5;
+  truth.substeps = 20;
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 60, truth.frame_rate_hz);
+  mme::Model search = mme::test::withoutValues(truth);
+  search.substeps = 1;
+  mme::IdentifyOptions options = mme::identifyOptionsFor(mme::Preset::kDefault);
+  options.estimate_std = false;
+  const mme::IdentifyResult r = mme::identifyModel(search, data, options);
+  EXPECT_GT(r.substeps, 1);
+  EXPECT_EQ(r.model.substeps, r.substeps);
+  EXPECT_NEAR(r.stiffest_omega_h, 0.5, 0.05);
+  bool said = false;
+  for (const std::string& note : r.notes) said = said || note.find("substeps per frame fit the frames better") != std::string::npos;
+  EXPECT_TRUE(said);
+  EXPECT_LT(maxRelativeError(r.values, mme::getValues(truth, mme::freeParameters(truth))), 0.01);
+}
+
+}  // namespace
