@@ -64,7 +64,9 @@ if (data_lines(dir."/stability_rates.csv") > 0) {
   # (the settings) come from the first row of each setting, whichever methods ran.
   rows(axis, m) = sprintf("< awk -F, -v a='%s' -v m='%s' '$1 == a && $4 == m' '%s'", axis, m, rates)
   settings(axis) = sprintf("< awk -F, -v a='%s' '$1 == a && !seen[$2]++' '%s'", axis, rates)
-  do for [axis in "noise omega_h occlusion spread unknowns conditional"] {
+  # The axes the map ran (in the file's order), so a partial run (--axes) draws its own.
+  map_axes = system(sprintf("awk -F, 'NR > 1 && !seen[$1]++ { printf \"%%s \", $1 }' '%s'", rates))
+  do for [axis in map_axes] {
     set xlabel axis
     set xrange [-0.3:*]
     plot settings(axis) using 3:(1/0):xtic(2) notitle, \
@@ -90,9 +92,11 @@ if (data_lines(dir."/stability_rates.csv") > 0 && data_lines(dir."/rollout.csv")
   set style data linespoints
   set xlabel "omega_max * h (explicit limit 2)"
   set xrange [-0.3:*]
-  plot settings("omega_h") using 3:(1/0):xtic(2) notitle, \
-       for [k in map_methods] rows("omega_h", word(methods,k+0)) using ($3 + ((k+0)%10-4)*0.02):8 \
-       with linespoints ls k+0 title word(methods,k+0)
+  if (strstrt(map_axes, "omega_h") > 0) {
+    plot settings("omega_h") using 3:(1/0):xtic(2) notitle, \
+         for [k in map_methods] rows("omega_h", word(methods,k+0)) using ($3 + ((k+0)%10-4)*0.02):8 \
+         with linespoints ls k+0 title word(methods,k+0)
+  }
   unset multiplot
   set xrange [*:*]; set yrange [*:*]
 }

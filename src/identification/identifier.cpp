@@ -89,6 +89,8 @@ namespace {
 constexpr double kWidenFactor = 10.0;
 /// A one-step fit with an RMS residual below this [m] is exact: the data hold no noise to filter.
 constexpr double kExactFitRms_m = 1e-9;
+/// Output-error iterations a start gets before the best start is fitted to convergence.
+constexpr int kScoutIterations = 15;
 /// The one-step cost is starved when its terms are fewer than this share of the observed samples.
 constexpr double kStarvedShare = 0.5;
 /// Most substeps per frame the stiff-scene rule asks for.
@@ -381,19 +383,22 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
       starts.push_back(g);
     }
     OutputErrorResult best_oe;
-    const auto fit = [&](const Model& m, const std::vector<double>& from) {
+    // Each start is scouted with a few iterations; the best one is then fitted to convergence.
+    const auto fit = [&](const Model& m, const std::vector<double>& from, int max_iterations,
+                         bool estimate_std) {
       OutputErrorOptions o = options.output_error;
+      o.max_iterations = std::min(o.max_iterations, max_iterations);
       o.threads = std::max(o.threads, options.es.threads);
       if (options.max_wall_time_s > 0.0) {
         const double left = options.max_wall_time_s - elapsed();
         if (left <= 0.0) return OutputErrorResult();
         o.max_time_s = o.max_time_s > 0.0 ? std::min(o.max_time_s, left) : left;
       }
-      o.estimate_std = false;
+      o.estimate_std = estimate_std;
       return estimateOutputError(m, trajectory, space, from, o);
     };
     for (const std::vector<double>& from : starts) {
-      const OutputErrorResult oe = fit(model, from);
+      const OutputErrorResult oe = fit(model, from, kScoutIterations, false);
       if (oe.ran && (!best_oe.ran || oe.observation_cost_m2 < best_oe.observation_cost_m2)) best_oe = oe;
       // A fit as good as the noise allows needs no other start.
       if (best_oe.ran && best_oe.noise_std_m <= 1.2 * best_oe.noise_std_prior_m) break;
@@ -409,7 +414,7 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
       if (needed > model.substeps) {
         Model finer = model;
         finer.substeps = needed;
-        const OutputErrorResult oe = fit(finer, best_oe.genes);
+        const OutputErrorResult oe = fit(finer, best_oe.genes, kScoutIterations, false);
         const bool better = oe.ran && oe.observation_cost_m2 < 0.5 * best_oe.observation_cost_m2;
         note("the stiffest mode has omega*h = " + formatValue(omega_h) + " per frame: " +
                  std::to_string(needed) + " substeps per frame fit the frames " +
@@ -425,11 +430,8 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
       }
     }
     if (best_oe.ran) {
-      OutputErrorOptions o = options.output_error;
-      o.threads = std::max(o.threads, options.es.threads);
-      o.estimate_std = options.estimate_std;
-      o.max_iterations = 20;  // from its own optimum: the covariance, and any last steps
-      const OutputErrorResult oe = estimateOutputError(model, trajectory, space, best_oe.genes, o);
+      const OutputErrorResult oe = fit(model, best_oe.genes, options.output_error.max_iterations,
+                                       options.estimate_std);
       if (oe.ran && oe.observation_cost_m2 <= best_oe.observation_cost_m2 * (1.0 + 1e-9)) best_oe = oe;
       best_genes = best_oe.genes;
       r.values = best_oe.values;
