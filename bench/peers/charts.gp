@@ -137,6 +137,7 @@ if (data_lines(dir."/efficiency.csv") > 0) {
   set terminal pngcairo size 900,600 noenhanced font ",10"
   set logscale xy
   set format y "%g"
+  set format x "%.0e"
   set xrange [*:*]; set yrange [*:*]
   set xlabel "marker noise std [m]"
   set ylabel "median over seeds of the median over parameters of |error| / Cramer-Rao bound"

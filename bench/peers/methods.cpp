@@ -267,6 +267,7 @@ RunResult runDefault(const Problem& p, uint64_t seed, const Budget& budget, bool
   r.estimator = result.estimator;
   r.substeps = result.substeps;
   r.noise_estimate_m = result.noise_estimate_m;
+  if (result.estimator == "output_error") r.residual_std_m = result.noise_std_m;
   for (mme::ParameterFlag f : result.flags) r.flagged += f != mme::ParameterFlag::kNone;
   for (auto [ms, threshold] : {std::make_pair(&r.to_1pct, 1.0), std::make_pair(&r.to_001pct, 0.01)})
     if (r.errors.max < threshold) {

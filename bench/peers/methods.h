@@ -78,6 +78,7 @@ struct RunResult {
   std::string estimator;          ///< "short_term" | "output_error" ("" = not the pipeline)
   int substeps = 0;               ///< integration steps per frame of the answer (0 = the problem's)
   double noise_estimate_m = -1.0; ///< the pipeline's marker-noise estimate (< 0 = not run)
+  double residual_std_m = -1.0;   ///< output error: RMS residual per coordinate at its answer
   int flagged = 0;                ///< parameters it flagged (at a bound, unidentifiable)
   std::vector<TracePoint> trace;  ///< best-so-far curve (thinned)
 };

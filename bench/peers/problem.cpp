@@ -160,6 +160,27 @@ double medianEfficiency(const std::vector<double>& values, const std::vector<dou
   return n % 2 ? ratio[n / 2] : 0.5 * (ratio[n / 2 - 1] + ratio[n / 2]);
 }
 
+double thresholdMiddleErrorPct(const Problem& problem) {
+  const mme::ParameterSpace& space = *problem.space;
+  const std::vector<double> truth = space.toSearch(problem.truth_values);
+  double worst = std::numeric_limits<double>::quiet_NaN();
+  for (size_t k = 0; k < space.size(); ++k) {
+    const mme::Gene& g = space.gene(k);
+    if (g.smooth || g.breakpoints.empty()) continue;
+    // The interval around the truth: the neighbouring breakpoints (the bounds at the ends), its
+    // middle taken in search space as the threshold search does.
+    const auto above = std::upper_bound(g.breakpoints.begin(), g.breakpoints.end(), truth[k]);
+    const double hi = above == g.breakpoints.end() ? g.upper : *above;
+    const double lo = above == g.breakpoints.begin() ? g.lower : *std::prev(above);
+    const double middle = 0.5 * (lo + hi);
+    const double value = g.log_scale ? std::exp(middle) : middle;
+    const double error = 100.0 * std::abs(value - problem.truth_values[k]) /
+                         std::max(std::abs(problem.truth_values[k]), 1e-300);
+    worst = std::isfinite(worst) ? std::max(worst, error) : error;
+  }
+  return worst;
+}
+
 void occludeRandomly(mme::Trajectory* data, double share, uint64_t seed) {
   if (share <= 0.0) return;
   mme::Random random(seed);

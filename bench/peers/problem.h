@@ -66,6 +66,12 @@ std::vector<double> cramerRaoPct(const Problem& problem);
 double medianEfficiency(const std::vector<double>& values, const std::vector<double>& truth,
                         const std::vector<double>& bound_pct);
 
+/// Thresholds of conditional bonds are determined by the data only up to the flat interval
+/// between the observed switching lengths around them (Gene::breakpoints). The largest error [%]
+/// over the thresholds of the middle of the truth's interval (what a method returning interval
+/// middles, like the threshold search, scores at best); NaN when the problem has no threshold.
+double thresholdMiddleErrorPct(const Problem& problem);
+
 /// Simulates `frames` frames of `model` (its substeps) at `rate_hz`, keeping the exact state at
 /// frame `first` (returned in *state_at_first) and returning frames [first, frames).
 mme::Trajectory simulateWindow(const mme::Model& model, int frames, double rate_hz, int first,

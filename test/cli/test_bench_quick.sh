@@ -32,7 +32,8 @@ done
 # gave its answer (1/0, n/a for the other methods) and finds noise-free paper_object's truth.
 col() { head -1 "$2" | tr ',' '\n' | grep -nx "$1" | cut -d: -f1; }
 runs="$tmp/stability_runs.csv"
-for c in bound_median_pct bound_max_pct efficiency output_error substeps noise_estimate_m ever_within_1pct; do
+for c in bound_median_pct bound_max_pct efficiency output_error substeps noise_estimate_m residual_std_m \
+         efficient_success_prob threshold_middle_max_pct ever_within_1pct; do
   [ -n "$(col "$c" "$runs")" ] || { echo "stability_runs.csv has no column $c"; exit 1; }
 done
 oe=$(col output_error "$runs"); eff=$(col efficiency "$runs"); bmed=$(col bound_median_pct "$runs")
