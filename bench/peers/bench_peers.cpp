@@ -1190,7 +1190,8 @@ void summary(const Settings& s, double total_wall_s) {
   // ---------------------------------------------------------------- (c)
   {
     md << "## (c) Long rollouts (10x the window, at least 100 frames) that stay bounded\n\n"
-          "The identified model (identification substeps) is simulated from the exact state at the "
+          "The identified model (identification substeps; `default`: the substeps it chose; a run "
+          "without an answer counts as unbounded) is simulated from the exact state at the "
           "first data frame; bounded = every particle stays within 10x the larger of the object's "
           "extent and the true motion's largest displacement. Chart: `rollout.png`.\n\n"
           "| method | map runs | bounded | share | speed-accuracy runs | bounded | share |\n"
