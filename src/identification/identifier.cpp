@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cmath>
@@ -89,6 +90,11 @@ namespace {
 constexpr double kWidenFactor = 10.0;
 /// A one-step fit with an RMS residual below this [m] is exact: the data hold no noise to filter.
 constexpr double kExactFitRms_m = 1e-9;
+/// Converged: the best cost fell by less than this share over the patience generations (a
+/// crawl that small moves no parameter that matters; noisy costs crawl for hundreds).
+constexpr double kPatienceShare = 1e-4;
+/// An output-error residual this many times the data's noise estimate is a misfit worth a word.
+constexpr double kMisfitFactor = 2.0;
 /// Output-error iterations a start gets before the best start is fitted to convergence.
 constexpr int kScoutIterations = 15;
 /// The one-step cost is starved when its terms are fewer than this share of the observed samples.
@@ -210,8 +216,11 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
   const auto start = std::chrono::steady_clock::now();
   Model model = input_model;
   auto cost = std::make_shared<ShortTermCost>(model, trajectory);
-  if (cost->termCount() == 0)
-    throw InputError("no usable (particle, frame) terms: too few frames or everything occluded");
+  // Without a single one-step term (heavy occlusion) only the output error can use the data.
+  const bool no_terms = cost->termCount() == 0;
+  if (no_terms && options.cost == CostChoice::kShortTerm)
+    throw InputError("no usable (particle, frame) terms for the one-step cost: too few frames or "
+                     "too much occlusion (--cost auto or output_error uses every observed sample)");
   if (!(model.frame_rate_hz > 0.0)) model.frame_rate_hz = trajectory.frame_rate_hz;
   ParameterSpace space(model, trajectory);
   std::vector<std::string> notes, seed_notes;
@@ -242,7 +251,7 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
   // on and resuming from that best (a bounded number of times).
   const auto search = [&]() {
     // Converged: over the last `patience` generations the best cost fell by less than a
-    // relative 1e-6, or it sits at the round-off floor.
+    // relative kPatienceShare, or it sits at the round-off floor.
     const double floor_m2 = 1e-26 * static_cast<double>(cost->residualCount());
     while (true) {
       es = std::make_unique<EvolutionStrategy>(space, options.es);
@@ -289,7 +298,7 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
         const size_t g = best_after.size();
         if (patience > 0 && es->refinements() > 0 &&
             (best <= floor_m2 || (g > static_cast<size_t>(patience) &&
-                                  best_after[g - 1 - patience] - best <= 1e-6 * best_after[g - 1 - patience]))) {
+                                  best_after[g - 1 - patience] - best <= kPatienceShare * best_after[g - 1 - patience]))) {
           stop = IdentifyStop::kConverged;
           break;
         }
@@ -322,7 +331,19 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
       seeds.insert(seeds.begin(), best);
     }
   };
-  search();
+  if (!no_terms) {
+    search();
+  } else {
+    note("the one-step cost has no term (each needs three frames of a particle and two of its "
+         "neighbours): the output error alone, from the equation-error start or the initial "
+         "distribution's centre",
+         0, 0);
+  }
+  // The search's answer, or without a search the best start there is.
+  std::vector<double> best_genes(space.size());
+  for (size_t k = 0; k < space.size(); ++k) best_genes[k] = space.gene(k).init_center;
+  if (!seeds.empty()) best_genes = seeds.front();
+  if (es) best_genes = es->best().genes;
 
   // Stiff scenes: more substeps when the answer's stiffest mode is fast for the frame rate.
   const std::vector<Eigen::Vector3d> reference = referencePositions(model, trajectory);
@@ -332,15 +353,14 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
     setValues(m, space.refs(), values);
     return stiffestModeRadPerS(m, reference) * h;
   };
-  double omega_h = omegaH(es->bestValues());
+  double omega_h = omegaH(space.toPhysical(best_genes));
 
   IdentifyResult r;
   r.parameters = space.refs();
-  r.values = es->bestValues();
-  r.global_cost = es->best().cost;
+  r.values = space.toPhysical(best_genes);
+  r.global_cost = es ? es->best().cost : std::numeric_limits<double>::infinity();
   r.estimator = "short_term";
   r.noise_estimate_m = estimateMarkerNoise(trajectory);
-  std::vector<double> best_genes = es->best().genes;
   std::vector<uint8_t> unidentifiable(space.size(), 0);
   std::vector<double> std_devs;
   // Auto: the output error when the markers look noisy and the one-step fit is not exact (a
@@ -353,8 +373,9 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
   for (int t = 0; t < trajectory.numFrames(); ++t)
     for (int i = 0; i < trajectory.numMarkers(); ++i)
       observed += !model.particles[i].fixed && !trajectory.isOccluded(t, i);
-  const bool starved = trajectory.numFrames() >= 3 &&
-                       static_cast<double>(cost->termCount()) < kStarvedShare * static_cast<double>(observed);
+  const bool starved =
+      no_terms || (trajectory.numFrames() >= 3 &&
+                   static_cast<double>(cost->termCount()) < kStarvedShare * static_cast<double>(observed));
   const bool output_error =
       options.cost == CostChoice::kOutputError ||
       (options.cost == CostChoice::kAuto &&
@@ -433,6 +454,17 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
       const OutputErrorResult oe = fit(model, best_oe.genes, options.output_error.max_iterations,
                                        options.estimate_std);
       if (oe.ran && oe.observation_cost_m2 <= best_oe.observation_cost_m2 * (1.0 + 1e-9)) best_oe = oe;
+      note("output error: " + std::to_string(best_oe.segments) + " segments, " +
+               std::to_string(best_oe.iterations) + " iterations of the final fit (" +
+               (best_oe.converged ? "converged" : best_oe.termination) + "), marker noise from its residuals " +
+               formatValue(best_oe.noise_std_m) + " m (from the data " + formatValue(r.noise_estimate_m) + " m)",
+           generations_done, evaluations_done);
+      if (best_oe.noise_std_m > kMisfitFactor * std::max(r.noise_estimate_m, 1e-9))
+        note("warning: the output-error residual (" + formatValue(best_oe.noise_std_m) +
+                 " m RMS) is " + formatValue(best_oe.noise_std_m / std::max(r.noise_estimate_m, 1e-9)) +
+                 "x the markers' noise: the model does not explain the motion (missing bonds or "
+                 "kinds, a wrong structure, or too few substeps for its stiffness)",
+             generations_done, evaluations_done);
       best_genes = best_oe.genes;
       r.values = best_oe.values;
       r.global_cost = best_oe.observation_cost_m2;
@@ -447,7 +479,7 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
   r.evaluations = evaluations_done;
   r.frames = trajectory.numFrames();
   r.stop = stop;
-  r.last_refine_status = es->lastRefineStatus();
+  r.last_refine_status = es ? es->lastRefineStatus() : RefineStatus::kNotRun;
   r.bound_widenings = widenings;
   r.substeps = model.substeps;
   r.stiffest_omega_h = omega_h;
@@ -462,6 +494,21 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
     std_devs = options.estimate_std
                    ? estimateStdDevs(*cost, space, best_genes)
                    : std::vector<double>(r.values.size(), std::numeric_limits<double>::quiet_NaN());
+  // A threshold is known only up to the flat interval between the observed lengths where its
+  // condition switches: its std is that interval's (uniform: width / sqrt(12)); an interval that
+  // runs to a search bound means the data never saw the condition switch on that side.
+  for (size_t k = 0; k < space.size() && k < std_devs.size(); ++k) {
+    const Gene& g = space.gene(k);
+    if (g.smooth) continue;
+    const auto it = std::upper_bound(g.breakpoints.begin(), g.breakpoints.end(), best_genes[k]);
+    if (g.breakpoints.empty() || it == g.breakpoints.begin() || it == g.breakpoints.end()) {
+      if (r.flags[k] == ParameterFlag::kNone) r.flags[k] = ParameterFlag::kUnidentifiable;
+      continue;
+    }
+    const double lo = *(it - 1), hi = *it;
+    const double slope = std::abs(space.physicalSlope(k, best_genes));
+    std_devs[k] = slope * (hi - lo) / std::sqrt(12.0);
+  }
   r.std_devs = std_devs;
   r.model = model;
   setValues(r.model, r.parameters, r.values);

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/core/stiffness.h"
 #include "motion_model_estimation/identification/identifier.h"
@@ -165,6 +167,28 @@ TEST(OutputError, StiffScenesGetMoreSubstepsAutomatically) {
   for (const std::string& note : r.notes) said = said || note.find("substeps per frame fit the frames better") != std::string::npos;
   EXPECT_TRUE(said);
   EXPECT_LT(maxRelativeError(r.values, mme::getValues(truth, mme::freeParameters(truth))), 0.01);
+}
+
+// 60 % of the samples occluded at random: the one-step cost keeps almost no term (or none) and an
+// exact fit of a few terms can be wrong; the identifier notices and the output error, which uses
+// every observed sample, finds the truth.
+TEST(OutputError, HeavyOcclusionGoesToTheOutputError) {
+  Noisy n;
+  mme::Trajectory data = mme::simulateTrajectory(n.truth, 60, n.truth.frame_rate_hz);
+  uint64_t state = 12345;
+  for (size_t k = 0; k < data.occluded.size(); ++k) {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    if ((state >> 33) % 10 < 6) data.occluded[k] = 1;
+  }
+  mme::IdentifyOptions options = mme::identifyOptionsFor(mme::Preset::kDefault);
+  options.estimate_std = false;
+  const mme::IdentifyResult r = mme::identifyModel(n.search, data, options);
+  EXPECT_EQ(r.estimator, "output_error");
+  EXPECT_LT(maxRelativeError(r.values, n.true_values), 1e-6);
+  options.cost = mme::CostChoice::kShortTerm;
+  if (mme::ShortTermCost(n.search, data).termCount() == 0) {
+    EXPECT_THROW(mme::identifyModel(n.search, data, options), mme::InputError);
+  }
 }
 
 }  // namespace

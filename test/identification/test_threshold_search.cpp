@@ -112,4 +112,38 @@ TEST(ThresholdSearch, TheDefaultEngineIdentifiesACableObject) {
   EXPECT_LT(mme::test::maxRelativeError(r.values, f.true_values), 0.01) << r.global_cost;
 }
 
+// A threshold is reported with the std of its flat interval (width / sqrt(12)), and flagged
+// unidentifiable when the data never saw its condition switch on one side.
+TEST(ThresholdSearch, AThresholdsStdIsItsIntervalsAndAnOpenOneIsFlagged) {
+  Fixture f;
+  mme::IdentifyOptions options = mme::identifyOptionsFor(mme::Preset::kDefault);
+  const mme::IdentifyResult r = mme::identifyModel(f.search, f.data, options);
+  int thresholds = 0;
+  for (size_t k = 0; k < r.parameters.size(); ++k) {
+    if (r.parameters[k].param != mme::kMinDistance) continue;
+    ++thresholds;
+    const mme::Gene& g = f.space.gene(k);
+    const double gene = std::log(r.values[k]);
+    const auto it = std::upper_bound(g.breakpoints.begin(), g.breakpoints.end(), gene);
+    ASSERT_TRUE(it != g.breakpoints.begin() && it != g.breakpoints.end());
+    const double width_m = std::exp(*it) - std::exp(*(it - 1));
+    EXPECT_NEAR(r.std_devs[k], width_m / std::sqrt(12.0), 0.02 * width_m) << r.parameters[k].name;
+    EXPECT_EQ(r.flags[k], mme::ParameterFlag::kNone);
+  }
+  EXPECT_EQ(thresholds, 2);
+  // A cable type the motion never stretches past its threshold: the threshold's interval runs
+  // to its upper bound.
+  mme::Model search = f.search;
+  mme::Param& t = search.bond_types[0].param(mme::kMinDistance);
+  double longest = 0.0;
+  for (const mme::Bond& b : search.bonds)
+    if (b.type == 0)
+      for (int frame = 0; frame < f.data.numFrames(); ++frame)
+        longest = std::max(longest, (f.data.position(frame, b.particles[1]) - f.data.position(frame, b.particles[0])).norm());
+  t.min = 1.05 * longest;  // the whole search range lies beyond every observed length
+  t.max = 2.0 * longest;
+  const mme::IdentifyResult open = mme::identifyModel(search, f.data, options);
+  EXPECT_EQ(open.flags[2], mme::ParameterFlag::kUnidentifiable) << open.parameters[2].name;
+}
+
 }  // namespace

@@ -40,7 +40,7 @@ struct IdentifyOptions {
   double max_wall_time_s = 0.0;  ///< stop after this wall time (0 = no limit)
   bool estimate_std = true;      ///< finite-difference Hessian at the optimum
   /// Stop once converged: after a refinement has run, when the best cost fell by less than a
-  /// relative 1e-6 over this many generations, or sits at the round-off floor (1e-26 m^2 per
+  /// relative 1e-4 over this many generations, or sits at the round-off floor (1e-26 m^2 per
   /// residual). 0 = run the whole generation budget (the paper).
   int patience_generations = 50;
   /// Seed the population with the equation-error solution (equation_error.h) where it applies,
