@@ -12,7 +12,7 @@ add_executable(bench_peers EXCLUDE_FROM_ALL
   bench/peers/bench_peers.cpp
   bench/peers/problem.cpp
   bench/peers/methods.cpp)
-target_link_libraries(bench_peers mme_core)
+target_link_libraries(bench_peers ${MME_LIBS})
 
 set(_mme_missing_peers "")
 if(Pagmo_FOUND)

@@ -14,7 +14,7 @@ set(MME_ESTIMATOR_TEST_NODES
   test_estimator_bad_input)    # bad frames survived and counted
 foreach(node ${MME_ESTIMATOR_TEST_NODES})
   add_executable(${node} EXCLUDE_FROM_ALL test/ros/${node}.cpp)
-  target_link_libraries(${node} mme_ros mme_core ${catkin_LIBRARIES} ${GTEST_LIBRARIES})
+  target_link_libraries(${node} mme_ros ${MME_LIBS} ${catkin_LIBRARIES} ${GTEST_LIBRARIES})
   add_dependencies(${node} ${PROJECT_NAME}_generate_messages_cpp)
   add_dependencies(tests ${node})
 endforeach()
