@@ -461,10 +461,15 @@ void onlineExperiment(const Settings& s) {
       online.addFrame(c.data.times_s[t], x, occluded);
       if ((t + 1) % per_update == 0 && online.update()) ++updates;
     }
-    // The window stands still: refinements and output-error fits finish on it.
-    for (int k = 0; k < 4; ++k) {
+    // The window stands still: refinements and output-error fits (each at most ~refine_max_s,
+    // warm from the last) go on until the estimate's cost stops falling (1 % over 3 rounds).
+    std::vector<double> costs;
+    for (int k = 0; k < 30; ++k) {
       online.waitForRefinement();
       if (online.update()) ++updates;
+      costs.push_back(online.estimate().global_cost);
+      const size_t m = costs.size();
+      if (m > 4 && costs[m - 4] - costs[m - 1] <= 0.01 * costs[m - 4]) break;
     }
     online.waitForRefinement();
     if (online.update()) ++updates;
