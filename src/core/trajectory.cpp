@@ -1,5 +1,8 @@
 #include "motion_model_estimation/core/trajectory.h"
 
+#include <stdexcept>
+#include <string>
+
 #include <cmath>
 #include <random>
 #include <sstream>
@@ -76,6 +79,23 @@ void addGaussianNoise(Trajectory* trajectory, double noise_std_m, uint64_t seed)
       trajectory->positions_m[k][c] += noise_std_m * r * std::cos(2.0 * M_PI * uniform());
     }
   }
+}
+
+Trajectory sliceFrames(const Trajectory& in, int first, int count) {
+  if (first < 0 || count < 0 || first + count > in.numFrames())
+    throw std::out_of_range("sliceFrames: frames [" + std::to_string(first) + ", " +
+                            std::to_string(first + count) + ") outside 0.." +
+                            std::to_string(in.numFrames()));
+  Trajectory out;
+  out.marker_names = in.marker_names;
+  out.frame_rate_hz = in.frame_rate_hz;
+  const size_t n = static_cast<size_t>(in.numMarkers());
+  const size_t a = static_cast<size_t>(first), b = static_cast<size_t>(first + count);
+  out.times_s.assign(in.times_s.begin() + a, in.times_s.begin() + b);
+  out.frame_numbers.assign(in.frame_numbers.begin() + a, in.frame_numbers.begin() + b);
+  out.positions_m.assign(in.positions_m.begin() + a * n, in.positions_m.begin() + b * n);
+  out.occluded.assign(in.occluded.begin() + a * n, in.occluded.begin() + b * n);
+  return out;
 }
 
 }  // namespace mme

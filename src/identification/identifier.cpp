@@ -30,7 +30,13 @@ std::string validateOptions(const IdentifyOptions& o) {
 IdentifyOptions identifyOptionsFor(Preset preset) {
   IdentifyOptions o;
   o.es = esOptionsFor(preset);
-  if (preset == Preset::kPaper) o.patience_generations = 0;
+  if (preset == Preset::kPaper) {
+    // The paper's method as it was: random starts, its bounds, its cost, the whole budget.
+    o.patience_generations = 0;
+    o.equation_error_start = false;
+    o.max_bound_widenings = 0;
+    o.cost = CostChoice::kShortTerm;
+  }
   return o;
 }
 

@@ -41,12 +41,7 @@ std::optional<VisualisationSnapshot> makeVisualisationSnapshot(const Model& mode
   }
   if (frames >= 3) {
     // One-step prediction of the latest frame from the two before it.
-    Trajectory last3 = window;
-    const int first = frames - 3;
-    last3.times_s.assign(window.times_s.begin() + first, window.times_s.end());
-    last3.frame_numbers.assign(window.frame_numbers.begin() + first, window.frame_numbers.end());
-    last3.positions_m.assign(window.positions_m.begin() + first * n, window.positions_m.end());
-    last3.occluded.assign(window.occluded.begin() + first * n, window.occluded.end());
+    const Trajectory last3 = sliceFrames(window, frames - 3, 3);
     const Trajectory pred = OnlineEstimator::rollout(model, last3, 2);
     if (pred.numFrames() == 2)
       for (int i = 0; i < n; ++i) scene.predicted.push_back(pred.position(1, i));

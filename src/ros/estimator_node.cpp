@@ -119,10 +119,6 @@ EstimatorNodeOptions readEstimatorOptions(const ros::NodeHandle& pnh) {
           "~update_budget_sec must be > 0");
   read(pnh, "refine_max_sec", &e.refine_max_s);
   require(e.refine_max_s > 0.0 && std::isfinite(e.refine_max_s), "~refine_max_sec must be > 0");
-  std::string cost = costChoiceName(e.cost);
-  read(pnh, "cost", &cost);
-  require(parseCostChoice(cost, &e.cost),
-          "~cost must be auto, short_term or output_error, got '" + cost + "'");
   read(pnh, "segment_frames", &e.output_error.segment_frames);
   require(e.output_error.segment_frames >= 2, "~segment_frames must be >= 2");
   read(pnh, "population", &e.es.population);
@@ -157,6 +153,11 @@ EstimatorNodeOptions readEstimatorOptions(const ros::NodeHandle& pnh) {
               refine_algorithm + "'");
   require(e.es.refine_start_generation >= 0 && e.es.refine_period >= 0,
           "~refine_start_generation and ~refine_period must be >= 0");
+  if (preset == Preset::kPaper) e.cost = CostChoice::kShortTerm;  // the paper's own cost
+  std::string cost = costChoiceName(e.cost);
+  read(pnh, "cost", &cost);
+  require(parseCostChoice(cost, &e.cost),
+          "~cost must be auto, short_term or output_error, got '" + cost + "'");
   const std::string bad = validateOptions(e);
   require(bad.empty(), "~" + bad);  // its messages name the option, i.e. the parameter
   return o;

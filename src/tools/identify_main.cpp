@@ -35,21 +35,6 @@ mme::Trajectory loadTrajectory(const std::string& path, const std::string& topic
   return trajectory;
 }
 
-/// Frames [first, first + count) of a trajectory.
-mme::Trajectory sliceFrames(const mme::Trajectory& in, int first, int count) {
-  mme::Trajectory out;
-  out.marker_names = in.marker_names;
-  out.frame_rate_hz = in.frame_rate_hz;
-  const int n = in.numMarkers();
-  out.times_s.assign(in.times_s.begin() + first, in.times_s.begin() + first + count);
-  out.frame_numbers.assign(in.frame_numbers.begin() + first,
-                           in.frame_numbers.begin() + first + count);
-  out.positions_m.assign(in.positions_m.begin() + first * n,
-                         in.positions_m.begin() + (first + count) * n);
-  out.occluded.assign(in.occluded.begin() + first * n, in.occluded.begin() + (first + count) * n);
-  return out;
-}
-
 std::string formatMetres(double m) {
   char text[32];
   std::snprintf(text, sizeof(text), "%.3g m", m);
@@ -133,7 +118,7 @@ int run(int argc, char** argv) {
   long count = args.getInt("frames", total - first, 1, total - first);
   if (args.has("window-frames"))
     count = std::min<long>(count, args.getInt("window-frames", count, 1, 100000000));
-  trajectory = sliceFrames(trajectory, first, static_cast<int>(count));
+  trajectory = mme::sliceFrames(trajectory, first, static_cast<int>(count));
   if (model.frame_rate_hz <= 0.0) model.frame_rate_hz = trajectory.frame_rate_hz;
   if (!(model.frame_rate_hz > 0.0))
     throw mme::InputError(trajectory_path + ": no frame rate in the data or the model");

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "motion_model_estimation/core/simulator.h"
+
 namespace mme {
 namespace test {
 
@@ -80,6 +82,13 @@ Model withoutBounds(Model model) {
   }
   return model;
 }
+
+SmallObjectFixture::SmallObjectFixture()
+    : truth(smallObject()),
+      search(withoutValues(truth)),
+      data(simulateTrajectory(truth, 60, 100.0)),
+      cost(std::make_shared<ShortTermCost>(search, data)),
+      true_values(getValues(truth, freeParameters(truth))) {}
 
 double maxRelativeError(const std::vector<double>& a, const std::vector<double>& truth) {
   double e = 0;

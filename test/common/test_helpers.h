@@ -9,7 +9,11 @@
 
 #include <Eigen/Core>
 
+#include <memory>
+
 #include "motion_model_estimation/core/model.h"
+#include "motion_model_estimation/core/short_term_cost.h"
+#include "motion_model_estimation/core/trajectory.h"
 
 namespace mme {
 namespace test {
@@ -31,6 +35,17 @@ Model smallObject();
 Model withoutValues(Model model);
 /// The model with every bound of every free parameter removed (the defaults must do).
 Model withoutBounds(Model model);
+/// smallObject() as the identification tests use it: the truth, the model without values,
+/// 60 noiseless frames at 100 Hz, its one-step cost and the true values.
+struct SmallObjectFixture {
+  SmallObjectFixture();
+  Model truth;
+  Model search;
+  Trajectory data;
+  std::shared_ptr<ShortTermCost> cost;
+  std::vector<double> true_values;
+};
+
 /// Largest |a_k - truth_k| / |truth_k|.
 double maxRelativeError(const std::vector<double>& a, const std::vector<double>& truth);
 

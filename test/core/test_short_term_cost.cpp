@@ -9,50 +9,17 @@
 #include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
+#include "test_helpers.h"
 
 namespace mme {
 namespace {
 
 using Vec = Eigen::Vector3d;
 
-Param value(double v, bool free = false) {
-  Param p;
-  p.present = true;
-  p.has_value = true;
-  p.value = v;
-  p.free = free;
-  return p;
-}
-
-int addParticle(Model* m, const Vec& x, double mass = 1.0, bool fixed = false,
-                const std::string& group = "", const Vec& v = Vec::Zero()) {
-  Particle p;
-  p.name = "p" + std::to_string(m->particles.size());
-  p.mass_kg = mass;
-  p.position_m = x;
-  p.velocity_mps = v;
-  p.fixed = fixed;
-  p.group = group;
-  m->particles.push_back(p);
-  return static_cast<int>(m->particles.size()) - 1;
-}
-
-int addType(Model* m, const std::string& name, BondKind kind,
-            std::initializer_list<std::pair<ParamId, double>> params, bool free = true) {
-  BondType t;
-  t.name = name;
-  t.kind = kind;
-  for (const auto& p : params) t.param(p.first) = value(p.second, free);
-  m->bond_types.push_back(t);
-  return static_cast<int>(m->bond_types.size()) - 1;
-}
-
-void addBond(Model* m, int type, int a, int b = -1, int c = -1) {
-  Bond bond;
-  bond.type = type;
-  bond.particles = {{a, b, c}};
-  m->bonds.push_back(bond);
-}
+using test::addBond;
+using test::addParticle;
+using test::addType;
+Param value(double v, bool free = false) { return test::valueParam(v, free); }
 
 /// A 4x3 sheet with every kind of bond and every parameter free (all non-zero so a 1%
 /// perturbation changes something), one fixed corner, gravity free.

@@ -7,32 +7,15 @@
 
 #include "motion_model_estimation/core/forces.h"
 #include "motion_model_estimation/core/simulator.h"
+#include "test_helpers.h"
 
 namespace mme {
 namespace {
 
 using Vec = Eigen::Vector3d;
 
-Param value(double v) {
-  Param p;
-  p.present = true;
-  p.has_value = true;
-  p.value = v;
-  return p;
-}
-
-int addParticle(Model* m, const Vec& x, double mass = 1.0, bool fixed = false,
-                const std::string& group = "", const Vec& v = Vec::Zero()) {
-  Particle p;
-  p.name = "p" + std::to_string(m->particles.size());
-  p.mass_kg = mass;
-  p.position_m = x;
-  p.velocity_mps = v;
-  p.fixed = fixed;
-  p.group = group;
-  m->particles.push_back(p);
-  return static_cast<int>(m->particles.size()) - 1;
-}
+using test::addParticle;
+Param value(double v) { return test::valueParam(v); }
 
 int addSpringType(Model* m, const std::string& name, double k, double rest, double damping = 0,
                   double k_nl = 0) {
@@ -59,12 +42,7 @@ int addFlexionType(Model* m, const std::string& name, double k, double rest_angl
   return static_cast<int>(m->bond_types.size()) - 1;
 }
 
-void addBond(Model* m, int type, int a, int b, int c = -1) {
-  Bond bond;
-  bond.type = type;
-  bond.particles = {{a, b, c}};
-  m->bonds.push_back(bond);
-}
+using test::addBond;
 
 void setGravity(Model* m, double gz) { m->gravity_mps2[2] = value(gz); }
 

@@ -19,13 +19,7 @@ using mme::test::maxRelativeError;
 using mme::test::smallObject;
 using mme::test::withoutValues;
 
-struct Fixture {
-  mme::Model truth = smallObject();
-  mme::Model search = withoutValues(truth);
-  mme::Trajectory data = mme::simulateTrajectory(truth, 60, 100.0);
-  std::shared_ptr<mme::ShortTermCost> cost = std::make_shared<mme::ShortTermCost>(search, data);
-  std::vector<double> true_values = mme::getValues(truth, mme::freeParameters(truth));
-};
+using Fixture = mme::test::SmallObjectFixture;
 
 TEST(EvolutionStrategy, ConvergesOnASmallObjectWithinTheBudget) {
   Fixture f;

@@ -78,6 +78,9 @@ TEST(Identifier, PaperPresetKeepsThePapersSchedule) {
   EXPECT_EQ(paper.es.refine_algorithm, mme::RefineAlgorithm::kBobyqa);
   EXPECT_EQ(paper.es.refine_start_generation, 400);
   EXPECT_EQ(paper.es.refine_period, 100);
+  EXPECT_FALSE(paper.equation_error_start);
+  EXPECT_EQ(paper.max_bound_widenings, 0);
+  EXPECT_EQ(paper.cost, mme::CostChoice::kShortTerm);
   const mme::IdentifyOptions best = mme::identifyOptionsFor(mme::Preset::kDefault);
   EXPECT_EQ(best.es.refine_algorithm, mme::RefineAlgorithm::kLevenbergMarquardt);
   mme::Preset preset = mme::Preset::kDefault;

@@ -34,18 +34,7 @@ struct Fixture : ::testing::Test {
   mme::Trajectory truth = mme::simulateTrajectory(model, 60, 100.0);
 
   /// Frames [first, first + count) of the truth, as the estimator's window would hold them.
-  mme::Trajectory window(int first, int count) const {
-    mme::Trajectory w = truth;
-    const int n = truth.numMarkers();
-    w.times_s.assign(truth.times_s.begin() + first, truth.times_s.begin() + first + count);
-    w.frame_numbers.assign(truth.frame_numbers.begin() + first,
-                           truth.frame_numbers.begin() + first + count);
-    w.positions_m.assign(truth.positions_m.begin() + first * n,
-                         truth.positions_m.begin() + (first + count) * n);
-    w.occluded.assign(truth.occluded.begin() + first * n,
-                      truth.occluded.begin() + (first + count) * n);
-    return w;
-  }
+  mme::Trajectory window(int first, int count) const { return mme::sliceFrames(truth, first, count); }
   static mme::Estimate estimate() {
     mme::Estimate e;
     e.valid = true;

@@ -38,6 +38,10 @@ struct Trajectory {
 Trajectory remapMarkers(const Trajectory& in, const std::vector<std::string>& names,
                         std::vector<std::string>* missing);
 
+/// Frames [first, first + count) of a trajectory (markers, rate and per-frame data kept).
+/// Throws std::out_of_range when the range does not lie inside it.
+Trajectory sliceFrames(const Trajectory& in, int first, int count);
+
 /// Adds independent Gaussian noise of `noise_std_m` [m] to every non-occluded coordinate,
 /// reproducibly from `seed` (own Box-Muller on mt19937_64: same output on every platform).
 void addGaussianNoise(Trajectory* trajectory, double noise_std_m, uint64_t seed);

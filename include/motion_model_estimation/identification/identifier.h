@@ -53,7 +53,7 @@ struct IdentifyOptions {
 
 std::string validateOptions(const IdentifyOptions& options);
 /// The options of a preset (preset.h): kDefault = the defaults above, kPaper = the paper's
-/// schedule and the whole generation budget.
+/// method (its schedule, random starts, its bounds, its one-step cost, the whole budget).
 IdentifyOptions identifyOptionsFor(Preset preset);
 
 /// Why identifyModel stopped.
