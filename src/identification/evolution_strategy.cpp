@@ -52,23 +52,6 @@ EsOptions esOptionsFor(Preset preset) {
   return o;
 }
 
-bool parsePreset(const std::string& name, Preset* preset) {
-  if (name == "default") *preset = Preset::kDefault;
-  else if (name == "paper") *preset = Preset::kPaper;
-  else return false;
-  return true;
-}
-
-const char* presetName(Preset preset) {
-  switch (preset) {
-    case Preset::kDefault: return "default";
-    case Preset::kPaper: return "paper";
-  }
-  return "?";
-}
-
-const char* presetNames() { return "default or paper"; }
-
 EvolutionStrategy::EvolutionStrategy(ParameterSpace space, const EsOptions& options)
     : space_(std::move(space)), options_(options), random_(options.seed),
       refiner_(Refiner::Create(options.refine_algorithm)) {

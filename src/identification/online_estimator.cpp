@@ -92,6 +92,7 @@ void OnlineEstimator::startRefinement(std::shared_ptr<const Cost> cost, const Mo
             std::chrono::duration<double>(deadline - std::chrono::steady_clock::now()).count();
         if (left > 0.0) {
           oe_options.max_time_s = oe_options.max_time_s > 0.0 ? std::min(oe_options.max_time_s, left) : left;
+          oe_options.cancel = &out->cancel;
           out->output = estimateOutputError(model, window, space,
                                             warm.empty() ? out->result.genes : warm, oe_options);
         }

@@ -203,6 +203,18 @@ class SegmentCost final : public ceres::CostFunction {
   mutable std::vector<double> theta_set_;  // theta the simulator holds (empty: none yet)
 };
 
+/// Stops the solve when the caller's flag is raised.
+class CancelCallback final : public ceres::IterationCallback {
+ public:
+  explicit CancelCallback(const std::atomic<bool>* flag) : flag_(flag) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    return flag_ && flag_->load() ? ceres::SOLVER_ABORT : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const std::atomic<bool>* flag_;
+};
+
 /// Start state of frame t from the data: the position, and the velocity x h from a central
 /// difference (one-sided at the ends, 0 where a neighbour is occluded).
 void dataState(const Problem& p, int t, double* state) {
@@ -321,6 +333,8 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
   solver.parameter_tolerance = 1e-12;
   if (options.max_time_s > 0.0) solver.max_solver_time_in_seconds = options.max_time_s;
   solver.logging_type = ceres::SILENT;
+  CancelCallback cancel(options.cancel);
+  if (options.cancel) solver.callbacks.push_back(&cancel);
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
   out.ran = true;
@@ -336,7 +350,7 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
   const int dof = std::max(1, out.observations - unknowns);
   out.noise_std_m = std::sqrt(out.observation_cost_m2 / dof);
 
-  if (options.estimate_std) {
+  if (options.estimate_std && !(options.cancel && options.cancel->load())) {
     // Fisher information of theta with the states eliminated (Schur complement):
     // I = A - B C^-1 B^T from J^T J = [A B; B^T C], then Cov = I^+ (sigma_hat / sigma_prior)^2.
     ceres::CRSMatrix crs;

@@ -7,11 +7,10 @@
 #include <string>
 
 #include "cli_args.h"
+#include "trajectory_input.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/identification/identifier.h"
 #include "motion_model_estimation/io/model_yaml.h"
-#include "motion_model_estimation/io/trajectory_io.h"
-#include "motion_model_estimation/ros/bag_io.h"
 
 namespace {
 
@@ -24,16 +23,6 @@ const char* kUsage =
     "                [--cost auto|short_term|output_error] [--segment-frames K]\n"
     "                [--refine bobyqa|newuoa|praxis|levenberg_marquardt] [--refine-start G]\n"
     "                [--refine-period G]\n";
-
-/// Reads the trajectory; the reader's warnings (e.g. a TRC file cut short) go to stderr.
-mme::Trajectory loadTrajectory(const std::string& path, const std::string& topic) {
-  if (mme::fileExtension(path) == ".bag") return mme::readBag(path, topic);
-  std::vector<std::string> warnings;
-  mme::Trajectory trajectory = mme::readTrajectoryFile(path, &warnings);
-  for (const std::string& warning : warnings)
-    std::fprintf(stderr, "identify: warning: %s\n", warning.c_str());
-  return trajectory;
-}
 
 std::string formatMetres(double m) {
   char text[32];
@@ -103,29 +92,8 @@ int run(int argc, char** argv) {
       p.has_value = false;
     }
   }
-  mme::Trajectory data = loadTrajectory(trajectory_path, args.get("topic"));
-  if (data.numFrames() == 0) throw mme::InputError(trajectory_path + ": no frames");
-  std::vector<std::string> names;
-  for (const mme::Particle& p : model.particles) names.push_back(p.name);
-  std::vector<std::string> missing;
-  mme::Trajectory trajectory = mme::remapMarkers(data, names, &missing);
-  if (!missing.empty())
-    throw mme::InputError(trajectory_path + ": marker '" + missing[0] +
-                          "' of the model is not in the trajectory (" +
-                          std::to_string(missing.size()) + " missing)");
-  const int total = trajectory.numFrames();
-  const int first = static_cast<int>(args.getInt("first-frame", 0, 0, total - 1));
-  long count = args.getInt("frames", total - first, 1, total - first);
-  if (args.has("window-frames"))
-    count = std::min<long>(count, args.getInt("window-frames", count, 1, 100000000));
-  trajectory = mme::sliceFrames(trajectory, first, static_cast<int>(count));
-  if (model.frame_rate_hz <= 0.0) model.frame_rate_hz = trajectory.frame_rate_hz;
-  if (!(model.frame_rate_hz > 0.0))
-    throw mme::InputError(trajectory_path + ": no frame rate in the data or the model");
-  if (trajectory.frame_rate_hz > 0 &&
-      std::abs(trajectory.frame_rate_hz - model.frame_rate_hz) > 1e-6 * model.frame_rate_hz)
-    std::fprintf(stderr, "identify: warning: data at %g Hz, model at %g Hz; using the model's\n",
-                 trajectory.frame_rate_hz, model.frame_rate_hz);
+  const mme::Trajectory trajectory =
+      mme::loadModelTrajectory("identify", trajectory_path, args.get("topic"), args, &model);
 
   const bool tty = isatty(STDOUT_FILENO);
   double last_print_s = -1.0;

@@ -9,6 +9,7 @@
 // occluded samples simply have no residual.
 #pragma once
 
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,8 @@ struct OutputErrorOptions {
   bool estimate_std = true;         ///< 1-sigma std per parameter from the Jacobian at the optimum
   /// The std from noise_std_m as given (the Cramer-Rao bound) rather than from the residuals.
   bool std_from_given_noise = false;
+  /// Raised by another thread: the solve stops after its current iteration (keeping its best).
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 struct OutputErrorResult {

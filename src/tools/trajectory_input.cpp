@@ -1,0 +1,47 @@
+#include "trajectory_input.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/io/trajectory_io.h"
+#include "motion_model_estimation/ros/bag_io.h"
+
+namespace mme {
+
+Trajectory loadModelTrajectory(const char* tool, const std::string& path, const std::string& topic,
+                               const CliArgs& args, Model* model) {
+  Trajectory data;
+  if (fileExtension(path) == ".bag") {
+    data = readBag(path, topic);
+  } else {
+    std::vector<std::string> warnings;
+    data = readTrajectoryFile(path, &warnings);
+    for (const std::string& warning : warnings) std::fprintf(stderr, "%s: warning: %s\n", tool, warning.c_str());
+  }
+  if (data.numFrames() == 0) throw InputError(path + ": no frames");
+  std::vector<std::string> names;
+  for (const Particle& p : model->particles) names.push_back(p.name);
+  std::vector<std::string> missing;
+  Trajectory trajectory = remapMarkers(data, names, &missing);
+  if (!missing.empty())
+    throw InputError(path + ": marker '" + missing[0] + "' of the model is not in the trajectory (" +
+                     std::to_string(missing.size()) + " missing)");
+  const int total = trajectory.numFrames();
+  const int first = static_cast<int>(args.getInt("first-frame", 0, 0, total - 1));
+  long count = args.getInt("frames", total - first, 1, total - first);
+  if (args.has("window-frames"))
+    count = std::min<long>(count, args.getInt("window-frames", count, 1, 100000000));
+  trajectory = sliceFrames(trajectory, first, static_cast<int>(count));
+  if (model->frame_rate_hz <= 0.0) model->frame_rate_hz = trajectory.frame_rate_hz;
+  if (!(model->frame_rate_hz > 0.0)) throw InputError(path + ": no frame rate in the data or the model");
+  if (trajectory.frame_rate_hz > 0 &&
+      std::abs(trajectory.frame_rate_hz - model->frame_rate_hz) > 1e-6 * model->frame_rate_hz)
+    std::fprintf(stderr, "%s: warning: data at %g Hz, model at %g Hz; using the model's\n", tool,
+                 trajectory.frame_rate_hz, model->frame_rate_hz);
+  return trajectory;
+}
+
+}  // namespace mme

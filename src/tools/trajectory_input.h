@@ -1,0 +1,21 @@
+// The trajectory a tool works on, the same way for every tool: read, matched to the model's
+// particles, cut to the frames asked for, its frame rate resolved.
+#pragma once
+
+#include <string>
+
+#include "cli_args.h"
+#include "motion_model_estimation/core/model.h"
+#include "motion_model_estimation/core/trajectory.h"
+
+namespace mme {
+
+/// Reads `path` (.trc, .c3d, or a .bag with MarkerFrame on `topic`), keeps the model's particles
+/// as markers in model order (a particle missing from the file: InputError naming it), keeps the
+/// frames --first-frame / --frames / --window-frames of `args` ask for, and fills in the model's
+/// frame rate from the data when it has none. The reader's warnings and a rate mismatch go to
+/// stderr as "TOOL: warning: ...".
+Trajectory loadModelTrajectory(const char* tool, const std::string& path, const std::string& topic,
+                               const CliArgs& args, Model* model);
+
+}  // namespace mme

@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# evaluate: the identified paper_object predicts held-out frames (not the ones it was identified
+# on) better than the three model-free guesses at 1, 5 and 10 frames; the CSV has the columns
+# horizon,predictor,rms_m and one row per horizon and predictor; bad options give exit 2.
+set -euo pipefail
+here=$(cd "$(dirname "$0")/../.." && pwd)
+source "$here/scripts/env.sh"
+bin="$here/.ws/devel/lib/motion_model_estimation"
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+
+"$bin/simulate" --scene paper_object --frames 160 --out "$tmp/data.trc" --noise-std 1e-5 \
+  --truth-out "$tmp/truth.yaml" >/dev/null
+sed -E 's/\{value: [^,]*, free: true/{free: true/' "$tmp/truth.yaml" >"$tmp/free.yaml"
+"$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --frames 100 \
+  --out "$tmp/identified.yaml" --quiet >/dev/null 2>&1
+"$bin/evaluate" --model "$tmp/identified.yaml" --trajectory "$tmp/data.trc" --first-frame 100 \
+  --csv "$tmp/out.csv" >"$tmp/out.log"
+head -1 "$tmp/out.csv" | grep -qx "horizon,predictor,rms_m"
+[ "$(tail -n +2 "$tmp/out.csv" | wc -l)" -eq 12 ]
+grep -q "rollout of 600 frames from the first start: bounded" "$tmp/out.log"
+rms() { awk -F, -v h="$1" -v p="$2" '$1 == h && $2 == p { print $3 }' "$tmp/out.csv"; }
+for h in 1 5 10; do
+  for guess in constant_velocity constant_acceleration gravity_only; do
+    awk -v m="$(rms "$h" model)" -v g="$(rms "$h" "$guess")" 'BEGIN { exit !(m < g) }' ||
+      { echo "horizon $h: model $(rms "$h" model) not below $guess $(rms "$h" "$guess")"; cat "$tmp/out.csv"; exit 1; }
+  done
+done
+
+expect_exit2() {  # expect_exit2 PATTERN ARGS...
+  local pattern=$1; shift
+  set +e; "$bin/evaluate" "$@" 2>"$tmp/err" >/dev/null; local rc=$?; set -e
+  [ "$rc" -eq 2 ] || { echo "expected exit 2, got $rc for: $*"; cat "$tmp/err"; exit 1; }
+  grep -q -- "$pattern" "$tmp/err" || { echo "missing '$pattern' in: $(cat "$tmp/err")"; exit 1; }
+}
+expect_exit2 "has no value (evaluate needs an identified model" --model "$tmp/free.yaml" --trajectory "$tmp/data.trc"
+expect_exit2 "--horizons: '0'" --model "$tmp/identified.yaml" --trajectory "$tmp/data.trc" --horizons 1,0
+expect_exit2 "--trajectory is required" --model "$tmp/identified.yaml"
+expect_exit2 "nope.trc" --model "$tmp/identified.yaml" --trajectory "$tmp/nope.trc"
+echo "test_evaluate: ok"

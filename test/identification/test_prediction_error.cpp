@@ -1,0 +1,78 @@
+// The prediction judge: the true model predicts its own motion exactly at every horizon and the
+// model-free guesses do not; each guess is exact on the motion it assumes; occluded targets do
+// not count; a model that blows up is caught by the rollout; bad horizons are refused.
+#include <gtest/gtest.h>
+
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/identification/prediction_error.h"
+#include "test_helpers.h"
+
+namespace {
+
+using mme::Predictor;
+
+double rms(const mme::PredictionReport& r, int horizon, Predictor p) {
+  for (const mme::PredictionError& row : r.rows)
+    if (row.horizon == horizon && row.predictor == p) return row.rms_m;
+  ADD_FAILURE() << "no row for horizon " << horizon;
+  return -1.0;
+}
+
+TEST(PredictionError, TheTrueModelPredictsItsOwnMotionAndTheGuessesDoNot) {
+  const mme::Model truth = mme::test::smallObject();
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 80, 100.0);
+  const mme::PredictionReport r = mme::evaluatePredictions(truth, data, {1, 5, 10});
+  ASSERT_EQ(r.rows.size(), 12u);
+  EXPECT_EQ(r.starts, 77);  // frames 2..78
+  for (int k : {1, 5, 10}) {
+    EXPECT_LT(rms(r, k, Predictor::kModel), 1e-12) << k;
+    EXPECT_GT(rms(r, k, Predictor::kConstantVelocity), 1e-5) << k;
+    EXPECT_GT(rms(r, k, Predictor::kConstantAcceleration), 1e-7) << k;
+  }
+  EXPECT_LT(rms(r, 1, Predictor::kConstantVelocity), rms(r, 10, Predictor::kConstantVelocity));
+  EXPECT_TRUE(r.rollout_bounded);
+  EXPECT_EQ(r.rollout_frames, 800);
+  // A model 50 % stiffer predicts worse, the more so the further ahead.
+  mme::Model stiff = truth;
+  for (mme::BondType& t : stiff.bond_types) t.param(mme::kStiffness).value *= 1.5;
+  const mme::PredictionReport w = mme::evaluatePredictions(stiff, data, {1, 10});
+  EXPECT_GT(rms(w, 1, Predictor::kModel), 1e-9);
+  EXPECT_GT(rms(w, 10, Predictor::kModel), 10.0 * rms(w, 1, Predictor::kModel));
+}
+
+// Free fall: no bond, gravity only. Semi-implicit Euler under constant gravity is exactly the
+// gravity-only guess and a constant second difference, so all three but constant velocity are
+// exact; occluded targets are not counted.
+TEST(PredictionError, EachGuessIsExactOnTheMotionItAssumes) {
+  mme::Model fall;
+  fall.frame_rate_hz = 50;
+  for (int c = 0; c < 3; ++c) fall.gravity_mps2[c] = mme::test::valueParam(c == 2 ? -9.81 : 0.0);
+  mme::test::addParticle(&fall, Eigen::Vector3d(0, 0, 1), 1.0, false, "", Eigen::Vector3d(0.3, 0, 2));
+  mme::test::addParticle(&fall, Eigen::Vector3d(1, 0, 1), 2.0, false, "", Eigen::Vector3d(0, -0.2, 0));
+  mme::Trajectory data = mme::simulateTrajectory(fall, 40, 50.0);
+  const mme::PredictionReport r = mme::evaluatePredictions(fall, data, {3});
+  EXPECT_LT(rms(r, 3, Predictor::kModel), 1e-12);
+  EXPECT_LT(rms(r, 3, Predictor::kGravityOnly), 1e-12);
+  EXPECT_LT(rms(r, 3, Predictor::kConstantAcceleration), 1e-10);
+  EXPECT_GT(rms(r, 3, Predictor::kConstantVelocity), 1e-3);
+  const long all = r.rows[0].samples;
+  data.occluded[20 * 2 + 1] = 1;  // particle 1 at frame 20: one target less, three starts less
+  const mme::PredictionReport o = mme::evaluatePredictions(fall, data, {3});
+  EXPECT_LT(o.rows[0].samples, all);
+  EXPECT_EQ(o.starts, r.starts - 3);
+}
+
+TEST(PredictionError, ARolloutThatBlowsUpIsCaughtAndBadInputIsRefused) {
+  const mme::Model truth = mme::test::smallObject();
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 30, 100.0);
+  mme::Model explosive = truth;
+  for (mme::BondType& t : explosive.bond_types) t.param(mme::kStiffness).value *= 1e5;  // omega h >> 2
+  EXPECT_FALSE(mme::evaluatePredictions(explosive, data, {1}).rollout_bounded);
+  EXPECT_THROW(mme::evaluatePredictions(truth, data, {}), mme::InputError);
+  EXPECT_THROW(mme::evaluatePredictions(truth, data, {0}), mme::InputError);
+  mme::Trajectory two = mme::sliceFrames(data, 0, 2);
+  EXPECT_THROW(mme::evaluatePredictions(truth, two, {1}), mme::InputError);
+}
+
+}  // namespace
