@@ -93,11 +93,10 @@ struct Kinematics {
 
 }  // namespace
 
-EquationErrorResult solveEquationError(const Model& model, const Trajectory& trajectory,
-                                       const EquationErrorOptions& options) {
-  EquationErrorResult out;
+EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajectory& trajectory,
+                                             const EquationErrorOptions& options) {
+  EquationErrorSystem out;
   const std::vector<ParamRef> refs = freeParameters(model);
-  out.values.assign(refs.size(), std::numeric_limits<double>::quiet_NaN());
   const int n = static_cast<int>(model.particles.size());
   const double rate_hz = model.frame_rate_hz > 0.0 ? model.frame_rate_hz : trajectory.frame_rate_hz;
   if (!(rate_hz > 0.0) || trajectory.numMarkers() != n) {
@@ -175,9 +174,11 @@ EquationErrorResult solveEquationError(const Model& model, const Trajectory& tra
   const double h = 1.0 / rate_hz;
   const Kinematics kin(options.smoothing_half_width, h);
   const size_t nc = columns.size();
-  Eigen::MatrixXd ata = Eigen::MatrixXd::Zero(nc, nc);
-  Eigen::VectorXd atb = Eigen::VectorXd::Zero(nc);
-  double btb = 0.0;
+  out.ata = Eigen::MatrixXd::Zero(nc, nc);
+  out.atb = Eigen::VectorXd::Zero(nc);
+  Eigen::MatrixXd& ata = out.ata;
+  Eigen::VectorXd& atb = out.atb;
+  double& btb = out.btb;
   // Which particles each particle's row needs (itself and its bond partners).
   std::vector<std::vector<int>> needs(n);
   for (int i = 0; i < n; ++i) needs[i].push_back(i);
@@ -302,6 +303,28 @@ EquationErrorResult solveEquationError(const Model& model, const Trajectory& tra
     out.reason = "no frame with every sample a row needs";
     return out;
   }
+  for (const Column& c : columns) {
+    out.column_param.push_back(c.param);
+    out.column_partner.push_back(c.role == Role::kProduct ? c.partner : -1);
+  }
+  return out;
+}
+
+EquationErrorResult solveEquationError(const Model& model, const Trajectory& trajectory,
+                                       const EquationErrorOptions& options) {
+  EquationErrorResult out;
+  const std::vector<ParamRef> refs = freeParameters(model);
+  out.values.assign(refs.size(), std::numeric_limits<double>::quiet_NaN());
+  EquationErrorSystem system = buildEquationErrorSystem(model, trajectory, options);
+  if (!system.reason.empty()) {
+    out.reason = system.reason;
+    return out;
+  }
+  out.rows = system.rows;
+  const Eigen::MatrixXd& ata = system.ata;
+  const Eigen::VectorXd& atb = system.atb;
+  const double btb = system.btb;
+  const size_t nc = system.column_param.size();
   // Column scaling, then a rank-revealing solve: a column no row touches stays undetermined.
   Eigen::VectorXd scale(nc);
   for (size_t j = 0; j < nc; ++j) scale[j] = ata(j, j) > 0.0 ? 1.0 / std::sqrt(ata(j, j)) : 0.0;
@@ -313,10 +336,9 @@ EquationErrorResult solveEquationError(const Model& model, const Trajectory& tra
   out.residual_rms_m = std::sqrt(residual2 / out.rows);
   for (size_t j = 0; j < nc; ++j) {
     if (!(ata(j, j) > 0.0)) continue;
-    const Column& col = columns[j];
     double value = theta[j];
-    if (col.role == Role::kProduct) value = theta[j] / theta[col.partner];
-    out.values[col.param] = value;
+    if (system.column_partner[j] >= 0) value = theta[j] / theta[system.column_partner[j]];
+    out.values[system.column_param[j]] = value;
   }
   // Non-physical values (a negative stiffness, damping or length) are not a start.
   for (size_t k = 0; k < refs.size(); ++k) {

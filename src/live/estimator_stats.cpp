@@ -24,6 +24,15 @@ std::string formatStats(const EstimatorStats& s) {
                   s.updates.max_gap_ms, s.updates.recent_max_gap_ms);
     text += field;
   }
+  if (s.prediction) {
+    for (const PredictionError& row : s.prediction->rows) {
+      if (row.samples == 0) continue;
+      std::snprintf(field, sizeof(field), " predict%d_%s_mm=%.3f", row.horizon,
+                    predictorName(row.predictor), 1e3 * row.rms_m);
+      text += field;
+    }
+    text += s.prediction->rollout_bounded ? " rollout_bounded=1" : " rollout_bounded=0";
+  }
   return text;
 }
 

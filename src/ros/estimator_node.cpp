@@ -105,6 +105,9 @@ EstimatorNodeOptions readEstimatorOptions(const ros::NodeHandle& pnh) {
   require(o.autosave_period_sec > 0.0 && std::isfinite(o.autosave_period_sec),
           "~autosave_period_sec must be > 0");
   read(pnh, "initial_model", &o.initial_model);
+  read(pnh, "prediction_period_sec", &o.prediction_period_sec);
+  require(o.prediction_period_sec >= 0.0 && std::isfinite(o.prediction_period_sec),
+          "~prediction_period_sec must be >= 0 (0 = off)");
   OnlineEstimatorOptions& e = o.estimator;
   read(pnh, "window_frames", &e.window_frames);
   require(e.window_frames >= 3, "~window_frames must be >= 3");
@@ -216,6 +219,9 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
   if (!autosave_target_.empty())
     autosave_timer_ = nh_.createWallTimer(ros::WallDuration(options_.autosave_period_sec),
                                           &EstimatorNode::onAutosaveTimer, this);
+  if (options_.prediction_period_sec > 0.0)
+    predictions_ = std::make_unique<PredictionMonitor>(std::vector<int>{1, 5, 10},
+                                                       options_.prediction_period_sec);
   stats_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), &EstimatorNode::onStatsTimer, this);
   ROS_INFO("estimator_node: %zu particles, %zu free parameters, window %d frames, population %d, "
            "input %s%s", model.particles.size(), freeParameters(model).size(),
@@ -361,6 +367,12 @@ void EstimatorNode::onStatsTimer(const ros::WallTimerEvent&) {
   stats.clock_jumps = clock_jumps_.jumps();
   stats.updates = update_stats_.summary(steadyNowS());
   stats.latency = latency_stats_.summary();
+  if (predictions_) {
+    const double now_s = steadyNowS();
+    if (predictions_->due(now_s) && estimator_->estimate().valid)
+      predictions_->evaluate(now_s, estimator_->currentModel(), estimator_->window());
+    stats.prediction = predictions_->report();
+  }
   std_msgs::String msg;
   msg.data = formatStats(stats);
   stats_pub_.publish(msg);

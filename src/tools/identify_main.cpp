@@ -10,6 +10,7 @@
 #include "trajectory_input.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/identification/structure_selection.h"
 #include "motion_model_estimation/io/model_yaml.h"
 
 namespace {
@@ -22,7 +23,7 @@ const char* kUsage =
     "                [--preset default|paper] [--patience G]\n"
     "                [--cost auto|short_term|output_error] [--segment-frames K]\n"
     "                [--refine bobyqa|newuoa|praxis|levenberg_marquardt] [--refine-start G]\n"
-    "                [--refine-period G]\n";
+    "                [--refine-period G] [--select-structure]\n";
 
 std::string formatMetres(double m) {
   char text[32];
@@ -35,7 +36,7 @@ int run(int argc, char** argv) {
                     {"model", "trajectory", "topic", "out", "method", "generations", "population",
                      "window-frames", "first-frame", "frames", "seed", "threads", "target-cost",
                      "max-time-s", "refine", "refine-start", "refine-period", "preset", "patience", "cost", "segment-frames"},
-                    {"compare-to-model", "quiet", "help"});
+                    {"compare-to-model", "quiet", "help", "select-structure"});
   if (args.has("help")) {
     std::cout << kUsage;
     return 0;
@@ -94,6 +95,27 @@ int run(int argc, char** argv) {
   }
   const mme::Trajectory trajectory =
       mme::loadModelTrajectory("identify", trajectory_path, args.get("topic"), args, &model);
+  if (args.has("select-structure")) {
+    // The structure from the markers first: the model file's bonds stay, candidates are added
+    // and thinned (structure_selection.h); the chosen model is then identified as usual on
+    // every frame, and the report of every candidate goes beside the output.
+    if (compare)
+      throw mme::InputError("--compare-to-model and --select-structure do not go together (the "
+                            "selected bonds are not the file's)");
+    mme::StructureOptions so;
+    so.identify = options;
+    so.progress = [&](const std::string& line) {
+      if (!quiet) std::printf("%s\n", line.c_str());
+      std::fflush(stdout);
+    };
+    const mme::StructureResult selected = mme::selectStructure(model, trajectory, so);
+    const std::string report = mme::formatStructureReport(selected);
+    std::printf("%s", report.c_str());
+    const std::string report_path = out_path + ".structure.csv";
+    mme::writeFileAtomically(report_path, mme::structureReportCsv(selected));
+    std::printf("identify: wrote %s\n", report_path.c_str());
+    model = selected.model;
+  }
 
   const bool tty = isatty(STDOUT_FILENO);
   double last_print_s = -1.0;

@@ -52,6 +52,7 @@ expect_exit2 "~preset must be default or paper" _model:="$model" _preset:=fast
 expect_exit2 "~cost must be auto, short_term or output_error" _model:="$model" _cost:=robust
 expect_exit2 "~update_budget_sec must be > 0" _model:="$model" _update_budget_sec:=0.0
 expect_exit2 "~segment_frames must be >= 2" _model:="$model" _segment_frames:=1
+expect_exit2 "~prediction_period_sec must be >= 0" _model:="$model" _prediction_period_sec:=-1.0
 expect_exit2 "~min_frames" _model:="$model" _window_frames:=20 _min_frames:=50
 expect_exit2 "missing_model.yaml" _model:="$tmp/missing_model.yaml"
 printf 'particles:\n  - {name: a, mass: -1}\n' >"$tmp/bad_model.yaml"

@@ -3,7 +3,8 @@
 # file and a model without values and stops once converged; writes the same model for any thread
 # count; --preset paper runs the paper's schedule; a parameter on a user's bound is flagged in the
 # table, on stderr and in the export; a file cut short of its header's frame count is reported
-# and its rows used; bad options and missing files give exit 2.
+# and its rows used; --select-structure finds paper_object's bonds and types from its particles;
+# bad options and missing files give exit 2.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/../.." && pwd)
 source "$here/scripts/env.sh"
@@ -58,6 +59,27 @@ expected="identify: warning: $tmp/cut.trc: header declares 60 frames, found 14 (
   { echo "expected stderr '$expected', got '$(cat "$tmp/cut.err")'"; exit 1; }
 grep -q "frames: 14" "$tmp/cut.yaml" || { echo "cut.yaml does not record 14 frames:"; cat "$tmp/cut.yaml"; exit 1; }
 
+# --select-structure from the particles alone (the model file without bond_types and bonds):
+# paper_object's 31 bonds in 10 types, springs only (no damper), the report beside the output,
+# then the chosen model identified as usual; the true bonds' pairs are the chosen ones.
+"$bin/simulate" --scene paper_object --frames 150 --out "$tmp/long.trc" >/dev/null
+sed '/^bond_types:/,$d' "$tmp/truth.yaml" >"$tmp/particles.yaml"
+"$bin/identify" --model "$tmp/particles.yaml" --trajectory "$tmp/long.trc" --out "$tmp/sel.yaml" \
+  --select-structure >"$tmp/sel.log" 2>"$tmp/sel.err" ||
+  { echo "identify --select-structure failed:"; cat "$tmp/sel.err"; exit 1; }
+grep -q "^springs,31,10,20,.*,1$" "$tmp/sel.yaml.structure.csv" ||
+  { echo "structure report:"; cat "$tmp/sel.yaml.structure.csv"; exit 1; }
+grep -q "^constant_velocity," "$tmp/sel.yaml.structure.csv"
+grep -q "^stopped: converged" "$tmp/sel.log"
+bond_pairs() {  # the sorted particle pairs of a model file's bonds
+  sed -n 's/.*particles: \[\([a-z0-9_]*\), \([a-z0-9_]*\)\].*/\1 \2/p' "$1" |
+    awk '{ if ($1 > $2) print $2, $1; else print $1, $2 }' | sort
+}
+[ "$(bond_pairs "$tmp/sel.yaml")" = "$(bond_pairs "$tmp/truth.yaml")" ] ||
+  { echo "selected bonds differ from the truth's"; diff <(bond_pairs "$tmp/sel.yaml") <(bond_pairs "$tmp/truth.yaml"); exit 1; }
+[ "$(grep -c "kind: spring" "$tmp/sel.yaml")" -eq 10 ]
+! grep -q "damping:" "$tmp/sel.yaml"
+
 expect_exit2() {  # expect_exit2 PATTERN ARGS... : exit code 2 and PATTERN in a one-line stderr
   local pattern=$1; shift
   set +e; "$bin/identify" "$@" 2>"$tmp/err" >/dev/null; local rc=$?; set -e
@@ -70,6 +92,7 @@ expect_exit2 "--refine 'lm' is unknown" "${ok[@]}" --refine lm
 expect_exit2 "--preset 'fast' is unknown (available: default or paper)" "${ok[@]}" --preset fast
 expect_exit2 "--refine-start" "${ok[@]}" --refine-start -1
 expect_exit2 "--refine-period" "${ok[@]}" --refine-period many
+expect_exit2 "do not go together" "${ok[@]}" --select-structure --compare-to-model
 expect_exit2 "nope.trc" --model "$tmp/free.yaml" --trajectory "$tmp/nope.trc" --out "$tmp/x.yaml"
 [ ! -e "$tmp/x.yaml" ]
 echo "test_identify: ok"

@@ -1,5 +1,7 @@
 #include "test_helpers.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -95,6 +97,13 @@ double maxRelativeError(const std::vector<double>& a, const std::vector<double>&
   for (size_t k = 0; k < a.size() && k < truth.size(); ++k)
     e = std::max(e, std::abs(a[k] - truth[k]) / std::abs(truth[k]));
   return e;
+}
+
+double predictionRms(const PredictionReport& report, int horizon, Predictor predictor) {
+  for (const PredictionError& row : report.rows)
+    if (row.horizon == horizon && row.predictor == predictor) return row.rms_m;
+  ADD_FAILURE() << "no row for horizon " << horizon << ", predictor " << predictorName(predictor);
+  return -1.0;
 }
 
 }  // namespace test

@@ -14,6 +14,7 @@
 #include "motion_model_estimation/core/model.h"
 #include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/trajectory.h"
+#include "motion_model_estimation/identification/prediction_error.h"
 
 namespace mme {
 namespace test {
@@ -48,6 +49,9 @@ struct SmallObjectFixture {
 
 /// Largest |a_k - truth_k| / |truth_k|.
 double maxRelativeError(const std::vector<double>& a, const std::vector<double>& truth);
+
+/// The RMS of `predictor` at `horizon` in `report` (a test failure and -1 when it has no row).
+double predictionRms(const PredictionReport& report, int horizon, Predictor predictor);
 
 }  // namespace test
 }  // namespace mme

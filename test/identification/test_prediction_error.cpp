@@ -12,12 +12,7 @@ namespace {
 
 using mme::Predictor;
 
-double rms(const mme::PredictionReport& r, int horizon, Predictor p) {
-  for (const mme::PredictionError& row : r.rows)
-    if (row.horizon == horizon && row.predictor == p) return row.rms_m;
-  ADD_FAILURE() << "no row for horizon " << horizon;
-  return -1.0;
-}
+using mme::test::predictionRms;
 
 TEST(PredictionError, TheTrueModelPredictsItsOwnMotionAndTheGuessesDoNot) {
   const mme::Model truth = mme::test::smallObject();
@@ -26,19 +21,19 @@ TEST(PredictionError, TheTrueModelPredictsItsOwnMotionAndTheGuessesDoNot) {
   ASSERT_EQ(r.rows.size(), 12u);
   EXPECT_EQ(r.starts, 77);  // frames 2..78
   for (int k : {1, 5, 10}) {
-    EXPECT_LT(rms(r, k, Predictor::kModel), 1e-12) << k;
-    EXPECT_GT(rms(r, k, Predictor::kConstantVelocity), 1e-5) << k;
-    EXPECT_GT(rms(r, k, Predictor::kConstantAcceleration), 1e-7) << k;
+    EXPECT_LT(predictionRms(r, k, Predictor::kModel), 1e-12) << k;
+    EXPECT_GT(predictionRms(r, k, Predictor::kConstantVelocity), 1e-5) << k;
+    EXPECT_GT(predictionRms(r, k, Predictor::kConstantAcceleration), 1e-7) << k;
   }
-  EXPECT_LT(rms(r, 1, Predictor::kConstantVelocity), rms(r, 10, Predictor::kConstantVelocity));
+  EXPECT_LT(predictionRms(r, 1, Predictor::kConstantVelocity), predictionRms(r, 10, Predictor::kConstantVelocity));
   EXPECT_TRUE(r.rollout_bounded);
   EXPECT_EQ(r.rollout_frames, 800);
   // A model 50 % stiffer predicts worse, the more so the further ahead.
   mme::Model stiff = truth;
   for (mme::BondType& t : stiff.bond_types) t.param(mme::kStiffness).value *= 1.5;
   const mme::PredictionReport w = mme::evaluatePredictions(stiff, data, {1, 10});
-  EXPECT_GT(rms(w, 1, Predictor::kModel), 1e-9);
-  EXPECT_GT(rms(w, 10, Predictor::kModel), 10.0 * rms(w, 1, Predictor::kModel));
+  EXPECT_GT(predictionRms(w, 1, Predictor::kModel), 1e-9);
+  EXPECT_GT(predictionRms(w, 10, Predictor::kModel), 10.0 * predictionRms(w, 1, Predictor::kModel));
 }
 
 // Free fall: no bond, gravity only. Semi-implicit Euler under constant gravity is exactly the
@@ -52,10 +47,10 @@ TEST(PredictionError, EachGuessIsExactOnTheMotionItAssumes) {
   mme::test::addParticle(&fall, Eigen::Vector3d(1, 0, 1), 2.0, false, "", Eigen::Vector3d(0, -0.2, 0));
   mme::Trajectory data = mme::simulateTrajectory(fall, 40, 50.0);
   const mme::PredictionReport r = mme::evaluatePredictions(fall, data, {3});
-  EXPECT_LT(rms(r, 3, Predictor::kModel), 1e-12);
-  EXPECT_LT(rms(r, 3, Predictor::kGravityOnly), 1e-12);
-  EXPECT_LT(rms(r, 3, Predictor::kConstantAcceleration), 1e-10);
-  EXPECT_GT(rms(r, 3, Predictor::kConstantVelocity), 1e-3);
+  EXPECT_LT(predictionRms(r, 3, Predictor::kModel), 1e-12);
+  EXPECT_LT(predictionRms(r, 3, Predictor::kGravityOnly), 1e-12);
+  EXPECT_LT(predictionRms(r, 3, Predictor::kConstantAcceleration), 1e-10);
+  EXPECT_GT(predictionRms(r, 3, Predictor::kConstantVelocity), 1e-3);
   const long all = r.rows[0].samples;
   data.occluded[20 * 2 + 1] = 1;  // particle 1 at frame 20: one target less, three starts less
   const mme::PredictionReport o = mme::evaluatePredictions(fall, data, {3});

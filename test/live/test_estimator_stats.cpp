@@ -1,4 +1,5 @@
-// formatStats: the ~stats line, field by field, and the fields that wait for their first value.
+// formatStats: the ~stats line, field by field, and the fields that wait for their first value
+// (latency, update gaps, the model's predictions).
 #include <gtest/gtest.h>
 
 #include "motion_model_estimation/live/estimator_stats.h"
@@ -36,6 +37,24 @@ TEST(EstimatorStats, LatencyAndUpdateGapFieldsOnceTheyExist) {
             "accepted=1 rejected=0 occluded=0 rejected_time=0 rejected_size=0 clock_jumps=0 "
             "updates=42 markers_published=9 latency_p50_ms=0.211 latency_p99_ms=1.500 "
             "max_update_gap_ms=512.250 max_update_gap_10s_ms=61.000");
+}
+
+TEST(EstimatorStats, PredictionFieldsPerHorizonAndPredictorInMillimetres) {
+  mme::EstimatorStats s;
+  mme::PredictionReport r;
+  r.rows.push_back({1, mme::Predictor::kModel, 2.5e-5, 300});
+  r.rows.push_back({1, mme::Predictor::kConstantVelocity, 1.25e-3, 300});
+  r.rows.push_back({10, mme::Predictor::kModel, 0.0, 0});  // beyond the window: left out
+  r.rows.push_back({10, mme::Predictor::kGravityOnly, 0.0123456, 120});
+  r.rollout_bounded = false;
+  s.prediction = r;
+  EXPECT_EQ(mme::formatStats(s),
+            "accepted=0 rejected=0 occluded=0 rejected_time=0 rejected_size=0 clock_jumps=0 "
+            "updates=0 markers_published=0 predict1_model_mm=0.025 "
+            "predict1_constant_velocity_mm=1.250 predict10_gravity_only_mm=12.346 "
+            "rollout_bounded=0");
+  s.prediction->rollout_bounded = true;
+  EXPECT_NE(mme::formatStats(s).find(" rollout_bounded=1"), std::string::npos);
 }
 
 }  // namespace

@@ -13,12 +13,19 @@
 // motion within 1e-5 m: the input was converted (units, order, frame), not only consistent.
 // (paper_object has no gravity, so its spring forces are invariant under a rigid transform:
 // without this check an ignored tf2 transform would still converge to the truth.)
+// With ~check_predictions: once converged, ~stats carries the model's prediction figures on the
+// window (predict<K>_<P>_mm) and the identified model predicts 10 frames ahead at least twice as
+// well as the constant-velocity guess, its rollout bounded.
 #include <geometry_msgs/TransformStamped.h>
+#include <std_msgs/String.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include <atomic>
+#include <map>
+#include <mutex>
 #include <set>
+#include <sstream>
 #include <thread>
 
 #include "test_estimator_common.h"
@@ -144,11 +151,27 @@ long matchingFrame(const std::vector<std::vector<Eigen::Vector3d>>& frames,
   return -1;
 }
 
+std::mutex g_stats_mutex;
+std::map<std::string, double> g_stats;  // the last ~stats line, field by field
+
+void onStats(const std_msgs::String::ConstPtr& msg) {
+  std::map<std::string, double> fields;
+  std::istringstream in(msg->data);
+  std::string item;
+  while (in >> item) {
+    const size_t eq = item.find('=');
+    if (eq != std::string::npos) fields[item.substr(0, eq)] = std::atof(item.c_str() + eq + 1);
+  }
+  std::lock_guard<std::mutex> lock(g_stats_mutex);
+  g_stats = std::move(fields);
+}
+
 TEST(EstimatorNode, ConvergesToTheTruth) {
   ros::NodeHandle nh, pnh("~");
   std::string scene = "paper_object", input = "external", topic = "estimator/estimate";
   double tolerance = 0.01, timeout_s = 25.0, rate_hz = 200.0;
   int consecutive = 3, expected_window_frames = 0;
+  bool check_predictions = false;
   pnh.getParam("scene", scene);
   pnh.getParam("input", input);
   pnh.getParam("estimate_topic", topic);
@@ -157,6 +180,7 @@ TEST(EstimatorNode, ConvergesToTheTruth) {
   pnh.getParam("publish_rate_hz", rate_hz);
   pnh.getParam("consecutive", consecutive);
   pnh.getParam("expected_window_frames", expected_window_frames);
+  pnh.getParam("check_predictions", check_predictions);
   ASSERT_TRUE(input == "external" || input == "markers" || input == "pointcloud" ||
               input == "vicon" || input == "mocap")
       << "~input " << input;
@@ -166,6 +190,8 @@ TEST(EstimatorNode, ConvergesToTheTruth) {
   EstimateRecorder recorder(nh, topic);
   const std::string markers_topic = topic.substr(0, topic.rfind('/') + 1) + "markers";
   ros::Subscriber markers_sub = nh.subscribe(markers_topic, 5, onMarkerArray);
+  ros::Subscriber stats_sub =
+      nh.subscribe(topic.substr(0, topic.rfind('/') + 1) + "stats", 5, onStats);
   const ros::WallTime start = ros::WallTime::now();
   std::unique_ptr<Streamer> streamer;
   if (input != "external") {
@@ -236,6 +262,32 @@ TEST(EstimatorNode, ConvergesToTheTruth) {
   for (size_t k = 1; k < converged.size(); ++k) {  // no reset happened: generations only grow
     EXPECT_GT(converged[k].msg.generation, converged[k - 1].msg.generation);
   }
+  if (!check_predictions) return;
+  // The prediction figures are recomputed every ~prediction_period_sec (5 s): within 15 s of
+  // convergence one is made with the converged model.
+  std::map<std::string, double> s;
+  const ros::WallTime stats_deadline = ros::WallTime::now() + ros::WallDuration(15.0);
+  bool good = false;
+  while (ros::ok() && ros::WallTime::now() < stats_deadline && !good) {
+    {
+      std::lock_guard<std::mutex> lock(g_stats_mutex);
+      s = g_stats;
+    }
+    good = s.count("predict10_model_mm") && s.count("predict10_constant_velocity_mm") &&
+           s["predict10_model_mm"] < 0.5 * s["predict10_constant_velocity_mm"] &&
+           s["rollout_bounded"] == 1.0;
+    if (!good) ros::WallDuration(0.1).sleep();
+  }
+  for (const char* key : {"predict1_model_mm", "predict5_model_mm", "predict10_model_mm",
+                          "predict10_constant_velocity_mm", "predict10_constant_acceleration_mm",
+                          "predict10_gravity_only_mm", "rollout_bounded"})
+    EXPECT_EQ(s.count(key), 1u) << key;
+  EXPECT_TRUE(good) << "10 frames ahead: model " << s["predict10_model_mm"]
+                    << " mm, constant velocity " << s["predict10_constant_velocity_mm"]
+                    << " mm, rollout_bounded " << s["rollout_bounded"];
+  std::printf("[ INFO     ] ~stats predictions 10 frames ahead: model %.4f mm, constant velocity "
+              "%.4f mm, constant acceleration %.4f mm\n", s["predict10_model_mm"],
+              s["predict10_constant_velocity_mm"], s["predict10_constant_acceleration_mm"]);
 }
 
 }  // namespace

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "motion_model_estimation/core/model.h"
 #include "motion_model_estimation/core/trajectory.h"
 
@@ -32,6 +34,22 @@ struct EquationErrorResult {
   /// prediction error of the solution.
   double residual_rms_m = 0.0;
 };
+
+/// The equation error's normal equations, before the solve: one column per linear unknown.
+struct EquationErrorSystem {
+  std::string reason;               ///< "" when built; else why the model does not fit the form
+  /// Per column: the free parameter (index into freeParameters(model)) it determines, and for a
+  /// product column (k L, k theta0) the stiffness column it is divided by (-1 otherwise).
+  std::vector<int> column_param, column_partner;
+  Eigen::MatrixXd ata;              ///< A^T A of the weighted rows
+  Eigen::VectorXd atb;              ///< A^T b
+  double btb = 0.0;                 ///< b^T b
+  size_t rows = 0;
+};
+
+/// Builds the normal equations of the equation error (the same rows as solveEquationError).
+EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajectory& trajectory,
+                                             const EquationErrorOptions& options = {});
 
 /// Solves the equation error for the model's free parameters. Applicable when every free
 /// parameter is a spring's stiffness, rest_length or damping, a flexion's stiffness, rest_angle

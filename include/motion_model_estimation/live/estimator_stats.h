@@ -1,12 +1,14 @@
 // The live node's ~stats line: its input ledger, clock jumps, updates and their gaps, and the
-// arrival -> ~markers latency, as "key=value" fields separated by spaces (scripts and the soak
+// arrival -> ~markers latency, the model's open-loop predictions on the window, as "key=value" fields separated by spaces (scripts and the soak
 // driver parse them by key). No ROS here.
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "motion_model_estimation/identification/online_estimator.h"
+#include "motion_model_estimation/identification/prediction_error.h"
 #include "motion_model_estimation/live/latency_stats.h"
 #include "motion_model_estimation/live/update_gap_stats.h"
 
@@ -18,11 +20,16 @@ struct EstimatorStats {
   uint64_t clock_jumps = 0;  ///< frames that restarted the window
   UpdateGapSummary updates;  ///< estimate updates and the gaps between them
   LatencySummary latency;    ///< arrival -> ~markers of drawn frames
+  std::optional<PredictionReport> prediction;  ///< the model's predictions on the window
 };
 
 /// "accepted=N rejected=N occluded=N rejected_time=N rejected_size=N clock_jumps=N updates=N
 /// markers_published=N", then "latency_p50_ms=X latency_p99_ms=X" once markers were drawn, then
-/// "max_update_gap_ms=X max_update_gap_10s_ms=X" once an update happened (X with 3 decimals).
+/// "max_update_gap_ms=X max_update_gap_10s_ms=X" once an update happened (X with 3 decimals),
+/// then, once a prediction report exists, per horizon K and predictor P (its CSV name: model,
+/// constant_velocity, constant_acceleration, gravity_only) "predict<K>_<P>_mm=X" (RMS per
+/// coordinate [mm], 3 decimals; horizons without a sample are left out) and
+/// "rollout_bounded=0|1".
 std::string formatStats(const EstimatorStats& stats);
 
 }  // namespace mme

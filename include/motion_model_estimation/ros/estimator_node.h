@@ -28,6 +28,7 @@
 #include "motion_model_estimation/live/clock_jump_detector.h"
 #include "motion_model_estimation/live/latency_stats.h"
 #include "motion_model_estimation/live/marker_name_map.h"
+#include "motion_model_estimation/live/prediction_monitor.h"
 #include "motion_model_estimation/live/update_gap_stats.h"
 #include "motion_model_estimation/live/visualisation_snapshot.h"
 #include "motion_model_estimation/ros/marker_builder.h"
@@ -59,6 +60,7 @@ struct EstimatorNodeOptions {
   std::string autosave_path;           ///< "" = off; relative paths are inside model_dir
   double autosave_period_sec = 10.0;   ///< [s] between autosaves
   std::string initial_model;           ///< resume from this model file when it exists
+  double prediction_period_sec = PredictionMonitor::kDefaultPeriodS;  ///< [s]; 0 = off
   OnlineEstimatorOptions estimator;
 };
 
@@ -127,6 +129,7 @@ class EstimatorNode {
   LatencyStats latency_stats_;
   UpdateGapStats update_stats_;
   ClockJumpDetector clock_jumps_;
+  std::unique_ptr<PredictionMonitor> predictions_;  // null when ~prediction_period_sec is 0
   // The input path (names_ -> estimator -> clock_jumps_) against ~load_model's replacement.
   std::mutex input_mutex_;
   MarkerNameMap names_;

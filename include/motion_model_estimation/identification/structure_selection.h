@@ -1,0 +1,101 @@
+// Model no more than a scene needs: the bonds, their components and their types chosen from the
+// markers (identify --select-structure).
+//
+// 1. Candidate bonds from the fitted frames: each particle's nearest neighbours by mean distance,
+//    and every pair whose distance varies little (a near-rigid pair); bonds already in the model
+//    stay as they are.
+// 2. Candidate components in rising complexity: springs; springs + dampers. For each, one spring
+//    type per candidate bond, and the equation error (forces linear in k, k L, c; gravity when
+//    the model's gravity is free) is thinned by grouped backward elimination: the group (a
+//    bond's spring, a bond's damper, gravity) whose removal raises the residual least goes while
+//    that rise is below the Bayesian information criterion's price of its parameters; a damper
+//    never outlives its spring.
+// 3. Bond typing: bonds whose solved (k, L, c) agree within 3 of their standard deviations share
+//    a type, kept when the criterion says the merged model is as good.
+// 4. Each level's typed model is refitted by the full identification (identifyModel) on the
+//    fitted frames and judged on the held-out frames (the end of the window, never fitted): the
+//    open-loop prediction error 10 frames ahead decides, the criterion breaks ties (within 2 %).
+//
+// Flexion, non-linear, conditional and viscous candidates are not tried yet.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "motion_model_estimation/core/model.h"
+#include "motion_model_estimation/core/trajectory.h"
+#include "motion_model_estimation/identification/identifier.h"
+
+namespace mme {
+
+struct StructureOptions {
+  int neighbours = 8;             ///< candidate pairs: each particle's k nearest (mean distance)
+  double rigid_relative_std = 0.02;  ///< ... and pairs whose distance's std / mean is below this
+  int max_candidates = 600;       ///< most candidate bonds (the nearest kept)
+  double held_out_share = 0.2;    ///< the window's end kept for judging (at least 15 frames)
+  double type_sigmas = 3.0;       ///< bonds agreeing within this many std share a type
+  bool try_dampers = true;        ///< the springs + dampers level
+  bool refit = true;              ///< refit each level with identifyModel (else equation error only)
+  int refit_generations = 100;    ///< the ranking refit's generation budget per level
+  double refit_max_s = 20.0;      ///< ... and wall time [s]
+  IdentifyOptions identify;       ///< the refits' settings
+  std::function<void(const std::string&)> progress;  ///< a line per step (may be empty)
+};
+
+/// One candidate model tried.
+struct StructureCandidate {
+  std::string name;              ///< e.g. "springs", "springs+dampers"
+  int bonds = 0;
+  int bond_types = 0;
+  int parameters = 0;            ///< free parameters
+  double fit_rms_m = 0.0;        ///< equation-error residual RMS on the fitted frames [m]
+  double bic = 0.0;              ///< Bayesian information criterion of that fit
+  double refit_cost_m2 = -1.0;   ///< the refit's global cost (-1 when not refitted)
+  /// Open-loop prediction RMS per coordinate on the held-out frames, 1, 5 and 10 frames ahead [m]
+  /// (NaN when the held-out frames hold no start).
+  double held_out_rms_m[3] = {0.0, 0.0, 0.0};
+  bool rollout_bounded = false;
+  bool chosen = false;
+  Model model;                   ///< every free value set
+};
+
+struct StructureResult {
+  Model model;                               ///< the chosen model, every free value set
+  std::vector<StructureCandidate> candidates;  ///< every candidate tried, in the order tried
+  int candidate_bonds = 0;                   ///< candidate pairs considered
+  int fitted_frames = 0, held_out_frames = 0;
+  /// The model-free guesses on the held-out frames, 1, 5 and 10 frames ahead [m]:
+  /// constant velocity, constant acceleration, gravity only.
+  double guess_rms_m[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+  std::vector<std::string> notes;
+};
+
+/// Chooses the structure. `model` holds the particles (names, masses, fixed flags, gravity: free
+/// gravity is a candidate like a bond) and possibly bonds that stay. `data` has the model's
+/// particles as markers (by name; others ignored). Throws InputError on unusable input (too few
+/// frames to hold some out, no candidate pair).
+StructureResult selectStructure(const Model& model, const Trajectory& data,
+                                const StructureOptions& options = {});
+
+/// A chosen structure against a known truth (tests and benchmarks): bonds matched by their
+/// particles' names.
+struct StructureScore {
+  double precision = 0.0, recall = 0.0, f1 = 0.0;  ///< of the bonds
+  int types = 0;                   ///< bond types of the chosen model
+  bool damped_everywhere = false;  ///< every chosen type has a non-zero damping
+  bool damped_nowhere = false;     ///< no chosen type has one
+  /// Largest relative error of k, L and c of a true bond's chosen type against its true type,
+  /// over the true bonds found (damping only where the truth has one).
+  double max_relative_error = 0.0;
+};
+StructureScore scoreStructure(const Model& truth, const Model& chosen);
+
+/// The report of every candidate as text (a table) and as CSV
+/// (name,bonds,bond_types,parameters,fit_rms_m,bic,refit_cost_m2,held_out_rms_1_m,
+///  held_out_rms_5_m,held_out_rms_10_m,rollout_bounded,chosen).
+std::string formatStructureReport(const StructureResult& result);
+std::string structureReportCsv(const StructureResult& result);
+
+}  // namespace mme

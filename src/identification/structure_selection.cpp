@@ -1,0 +1,929 @@
+#include "motion_model_estimation/identification/structure_selection.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+#include <utility>
+
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/identification/equation_error.h"
+#include "motion_model_estimation/identification/prediction_error.h"
+
+namespace mme {
+
+namespace {
+
+constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+constexpr int kHorizons[3] = {1, 5, 10};
+constexpr int kMaxPasses = 12;  ///< solves per level (non-physical drops, screening rounds)
+
+/// Mean and relative spread of a pair's distance over the frames where both are seen.
+struct PairStats {
+  double mean_m = 0.0;
+  double relative_std = 0.0;
+  bool seen = false;
+};
+
+std::vector<std::pair<int, int>> candidatePairs(const Model& model, const Trajectory& data,
+                                                const StructureOptions& options) {
+  const int n = static_cast<int>(model.particles.size());
+  std::set<std::pair<int, int>> bonded;
+  for (const Bond& b : model.bonds)
+    if (kindArity(model.bond_types[b.type].kind) == 2)
+      bonded.insert(std::minmax(b.particles[0], b.particles[1]));
+  std::vector<std::vector<PairStats>> stats(n, std::vector<PairStats>(n));
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b) {
+      double sum = 0.0, sum2 = 0.0;
+      int count = 0;
+      for (int t = 0; t < data.numFrames(); ++t) {
+        if (data.isOccluded(t, a) || data.isOccluded(t, b)) continue;
+        const double d = (data.position(t, a) - data.position(t, b)).norm();
+        sum += d;
+        sum2 += d * d;
+        ++count;
+      }
+      if (count < 3) continue;
+      PairStats& s = stats[a][b];
+      s.seen = true;
+      s.mean_m = sum / count;
+      const double var = std::max(0.0, sum2 / count - s.mean_m * s.mean_m);
+      s.relative_std = s.mean_m > 0.0 ? std::sqrt(var) / s.mean_m : 0.0;
+      stats[b][a] = s;
+    }
+  const auto usable = [&](int a, int b) {
+    return a != b && stats[a][b].seen && stats[a][b].mean_m > 0.0 &&
+           !(model.particles[a].fixed && model.particles[b].fixed) &&
+           !bonded.count(std::minmax(a, b));
+  };
+  std::set<std::pair<int, int>> chosen;
+  for (int a = 0; a < n; ++a) {
+    std::vector<std::pair<double, int>> near;
+    for (int b = 0; b < n; ++b)
+      if (usable(a, b)) near.push_back({stats[a][b].mean_m, b});
+    std::sort(near.begin(), near.end());
+    for (int k = 0; k < options.neighbours && k < static_cast<int>(near.size()); ++k)
+      chosen.insert(std::minmax(a, near[k].second));
+  }
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b)
+      if (usable(a, b) && stats[a][b].relative_std < options.rigid_relative_std) chosen.insert({a, b});
+  std::vector<std::pair<double, std::pair<int, int>>> by_length;
+  for (const auto& p : chosen) by_length.push_back({stats[p.first][p.second].mean_m, p});
+  std::sort(by_length.begin(), by_length.end());
+  if (static_cast<int>(by_length.size()) > options.max_candidates) by_length.resize(options.max_candidates);
+  std::vector<std::pair<int, int>> pairs;
+  for (const auto& e : by_length) pairs.push_back(e.second);
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
+
+Param freeParam(double value) {
+  Param p;
+  p.value = value;
+  p.present = true;
+  p.has_value = true;
+  p.free = true;
+  return p;
+}
+
+/// A spring bond of its own type per pair, appended to `base`; returns the first new type.
+int addCandidateBonds(Model* model, const std::vector<std::pair<int, int>>& pairs,
+                      const Trajectory& data, bool dampers) {
+  const int first = static_cast<int>(model->bond_types.size());
+  for (const auto& p : pairs) {
+    BondType type;
+    type.name = "b_" + model->particles[p.first].name + "_" + model->particles[p.second].name;
+    type.kind = BondKind::kSpring;
+    double length = 0.0;
+    int count = 0;
+    for (int t = 0; t < data.numFrames(); ++t)
+      if (!data.isOccluded(t, p.first) && !data.isOccluded(t, p.second)) {
+        length += (data.position(t, p.first) - data.position(t, p.second)).norm();
+        ++count;
+      }
+    type.param(kStiffness) = freeParam(1.0);
+    type.param(kRestLength) = freeParam(count > 0 ? length / count : 0.1);
+    if (dampers) type.param(kDamping) = freeParam(0.1);
+    Bond bond;
+    bond.type = static_cast<int>(model->bond_types.size());
+    bond.particles = {{p.first, p.second, -1}};
+    model->bond_types.push_back(type);
+    model->bonds.push_back(bond);
+  }
+  return first;
+}
+
+/// Solves the columns in `active` of the normal equations (scaled, rank-revealing); the others 0.
+Eigen::VectorXd solveActive(const EquationErrorSystem& sys, const std::vector<int>& active,
+                            Eigen::MatrixXd* inverse_scaled, Eigen::VectorXd* scale_out) {
+  const int m = static_cast<int>(active.size());
+  Eigen::MatrixXd a(m, m);
+  Eigen::VectorXd b(m), scale(m);
+  for (int i = 0; i < m; ++i) {
+    const double d = sys.ata(active[i], active[i]);
+    scale[i] = d > 0.0 ? 1.0 / std::sqrt(d) : 0.0;
+  }
+  for (int i = 0; i < m; ++i) {
+    b[i] = scale[i] * sys.atb[active[i]];
+    for (int j = 0; j < m; ++j) a(i, j) = scale[i] * sys.ata(active[i], active[j]) * scale[j];
+  }
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(a);
+  cod.setThreshold(1e-12);
+  Eigen::VectorXd theta = scale.asDiagonal() * cod.solve(b);
+  if (inverse_scaled) *inverse_scaled = cod.pseudoInverse();
+  if (scale_out) *scale_out = scale;
+  Eigen::VectorXd full = Eigen::VectorXd::Zero(sys.atb.size());
+  for (int i = 0; i < m; ++i) full[active[i]] = theta[i];
+  return full;
+}
+
+double rss(const EquationErrorSystem& sys, const Eigen::VectorXd& theta) {
+  return std::max(0.0, sys.btb - 2.0 * theta.dot(sys.atb) + theta.dot(sys.ata * theta));
+}
+
+/// A removable unit: a bond's spring (with its damper), a bond's damper alone, or gravity.
+struct Group {
+  std::vector<int> columns;
+  int bond_type = -1;     ///< -1: gravity
+  bool damper = false;
+  int child = -1;         ///< the damper group that must go with this spring
+  bool active = true;
+};
+
+struct Selection {
+  std::vector<Group> groups;
+  Eigen::VectorXd theta;
+  double rss_m2 = 0.0;
+  int parameters = 0;
+  std::vector<int> active_columns;
+};
+
+std::vector<int> activeColumns(const std::vector<Group>& groups, const std::vector<int>& always) {
+  std::vector<int> cols = always;
+  for (const Group& g : groups)
+    if (g.active) cols.insert(cols.end(), g.columns.begin(), g.columns.end());
+  std::sort(cols.begin(), cols.end());
+  return cols;
+}
+
+/// Grouped backward elimination with the BIC's price per parameter, sigma2 * ln(N). The solve
+/// is kept as the (scaled) inverse of the active normal equations and downdated when a unit
+/// goes (theta_K -= inv_KR inv_RR^-1 theta_R, inv_KK -= inv_KR inv_RR^-1 inv_RK); it is
+/// recomputed from scratch every 25 removals against drift.
+Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
+                    const std::vector<int>& always, double sigma2,
+                    const std::function<void(const std::string&)>& progress) {
+  const double price_per_param = sigma2 * std::log(static_cast<double>(std::max<size_t>(sys.rows, 2)));
+  int removed = 0, since_solve = 0;
+  std::vector<int> cols;
+  Eigen::MatrixXd inv;
+  Eigen::VectorXd scale, theta_s;  // theta = scale .* theta_s
+  std::map<int, int> position;
+  const auto resolve = [&]() {
+    cols = activeColumns(groups, always);
+    const Eigen::VectorXd full = solveActive(sys, cols, &inv, &scale);
+    theta_s.resize(cols.size());
+    position.clear();
+    for (size_t i = 0; i < cols.size(); ++i) {
+      position[cols[i]] = static_cast<int>(i);
+      theta_s[i] = scale[i] > 0.0 ? full[cols[i]] / scale[i] : 0.0;
+    }
+    since_solve = 0;
+  };
+  // The positions of a unit's columns (a spring with its active damper).
+  const auto unitOf = [&](int g) {
+    std::vector<int> unit;
+    for (int c : groups[g].columns) unit.push_back(position.at(c));
+    const int child = groups[g].child;
+    if (child >= 0 && groups[child].active)
+      for (int c : groups[child].columns) unit.push_back(position.at(c));
+    return unit;
+  };
+  // The residual's rise when the columns at `r` go: theta_R^T inv_RR^-1 theta_R.
+  const auto rise = [&](const std::vector<int>& r) {
+    const int u = static_cast<int>(r.size());
+    Eigen::MatrixXd block(u, u);
+    Eigen::VectorXd t(u);
+    for (int i = 0; i < u; ++i) {
+      t[i] = theta_s[r[i]];
+      for (int j = 0; j < u; ++j) block(i, j) = inv(r[i], r[j]);
+    }
+    return t.dot(block.completeOrthogonalDecomposition().solve(t));
+  };
+  // Removes the columns at positions `r` from the solve (downdate).
+  const auto drop = [&](std::vector<int> r) {
+    std::sort(r.begin(), r.end());
+    const int m = static_cast<int>(cols.size()), u = static_cast<int>(r.size());
+    std::vector<int> k;
+    for (int i = 0, j = 0; i < m; ++i) {
+      if (j < u && r[j] == i) { ++j; continue; }
+      k.push_back(i);
+    }
+    const int n = static_cast<int>(k.size());
+    Eigen::MatrixXd rr(u, u), kr(n, u), kk(n, n);
+    Eigen::VectorXd tr(u), tk(n), sk(n);
+    for (int i = 0; i < u; ++i) {
+      tr[i] = theta_s[r[i]];
+      for (int j = 0; j < u; ++j) rr(i, j) = inv(r[i], r[j]);
+    }
+    for (int i = 0; i < n; ++i) {
+      tk[i] = theta_s[k[i]];
+      sk[i] = scale[k[i]];
+      for (int j = 0; j < u; ++j) kr(i, j) = inv(k[i], r[j]);
+      for (int j = 0; j < n; ++j) kk(i, j) = inv(k[i], k[j]);
+    }
+    const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> rr_cod(rr);
+    const Eigen::MatrixXd w = rr_cod.solve(kr.transpose());  // inv_RR^-1 inv_RK
+    theta_s = tk - kr * rr_cod.solve(tr);
+    inv = kk - kr * w;
+    scale = sk;
+    std::vector<int> kept_cols;
+    position.clear();
+    for (int i = 0; i < n; ++i) {
+      kept_cols.push_back(cols[k[i]]);
+      position[cols[k[i]]] = i;
+    }
+    cols = kept_cols;
+    ++since_solve;
+  };
+  resolve();
+  for (;;) {
+    if (since_solve >= 25) resolve();
+    // The cheapest unit to remove, and every unit far below its price.
+    double best_ratio = std::numeric_limits<double>::infinity();
+    int best = -1;
+    std::vector<int> cheap;
+    for (size_t g = 0; g < groups.size(); ++g) {
+      if (!groups[g].active || groups[g].columns.empty()) continue;
+      const std::vector<int> unit = unitOf(static_cast<int>(g));
+      const double ratio = rise(unit) / (unit.size() * price_per_param);
+      if (ratio < 1e-3) cheap.push_back(static_cast<int>(g));
+      if (ratio < best_ratio) {
+        best_ratio = ratio;
+        best = static_cast<int>(g);
+      }
+    }
+    if (best < 0 || !(best_ratio < 1.0)) break;
+    // The cheap ones together when their joint rise is cheap too (collinear units can each look
+    // free while together they are not); else the cheapest alone.
+    std::vector<int> batch = {best};
+    if (cheap.size() > 1) {
+      std::vector<int> r;
+      for (int g : cheap) {
+        const std::vector<int> unit = unitOf(g);
+        r.insert(r.end(), unit.begin(), unit.end());
+      }
+      if (rise(r) < 1e-2 * r.size() * price_per_param) batch = cheap;
+    }
+    std::vector<int> r;
+    for (int g : batch) {
+      const std::vector<int> unit = unitOf(g);
+      r.insert(r.end(), unit.begin(), unit.end());
+    }
+    for (int g : batch) {
+      groups[g].active = false;
+      if (groups[g].child >= 0) groups[groups[g].child].active = false;
+    }
+    drop(r);
+    removed += static_cast<int>(batch.size());
+  }
+  resolve();  // the final solve from scratch
+  Selection s;
+  s.groups = std::move(groups);
+  s.theta = Eigen::VectorXd::Zero(sys.atb.size());
+  for (size_t i = 0; i < cols.size(); ++i) s.theta[cols[i]] = scale[i] * theta_s[i];
+  s.rss_m2 = rss(sys, s.theta);
+  s.parameters = static_cast<int>(cols.size());
+  s.active_columns = cols;
+  if (progress) progress("  elimination: " + std::to_string(removed) + " unit(s) removed, " +
+                         std::to_string(cols.size()) + " unknowns left");
+  return s;
+}
+
+/// BIC of a least-squares fit: N ln(RSS / N) + P ln N, RSS floored at N sigma_floor^2.
+double bic(double rss_m2, size_t rows, int parameters, double sigma2_floor) {
+  const double n = static_cast<double>(std::max<size_t>(rows, 1));
+  const double r = std::max(rss_m2, n * sigma2_floor);
+  return n * std::log(r / n) + parameters * std::log(n);
+}
+
+/// The model a selection describes: the base model's own bonds, then one type per kept bond
+/// with its solved values (k, L, c); gravity off when its unit was removed.
+struct Solved {
+  Model model;
+  std::vector<int> kept_types;      ///< the candidate types kept (indices into the candidate model)
+  std::vector<Eigen::Vector3d> value, sigma;  ///< per kept type: (k, L, c) and their 1-sigma
+  std::vector<uint8_t> damped;      ///< per kept type: it has a damper
+  std::vector<int> bad_springs;     ///< kept types with k <= 0 or L <= 0
+  std::vector<int> bad_dampers;     ///< kept types with a damping <= 0
+};
+
+Solved describe(const Model& candidate, const EquationErrorSystem& sys, const Selection& sel,
+                double sigma2, int first_candidate_type, bool dampers) {
+  Solved out;
+  const std::vector<ParamRef> refs = freeParameters(candidate);
+  // Which column holds which parameter of which type.
+  std::map<std::pair<int, int>, int> column_of;  // (type, param) -> column
+  for (size_t j = 0; j < sys.column_param.size(); ++j) {
+    const ParamRef& r = refs[sys.column_param[j]];
+    const bool product = sys.column_partner[j] >= 0;
+    column_of[{r.bond_type, product ? -kRestLength - 1 : r.param}] = static_cast<int>(j);
+  }
+  Eigen::MatrixXd inv;
+  Eigen::VectorXd scale;
+  solveActive(sys, sel.active_columns, &inv, &scale);
+  std::map<int, int> position;
+  for (size_t i = 0; i < sel.active_columns.size(); ++i) position[sel.active_columns[i]] = static_cast<int>(i);
+  const auto cov = [&](int ci, int cj) {
+    const int pi = position.at(ci), pj = position.at(cj);
+    return sigma2 * inv(pi, pj) * scale[pi] * scale[pj];
+  };
+  Model model = candidate;
+  // Every solved value (base types, candidates, gravity) into the model.
+  for (int j : sel.active_columns) {
+    const int partner = sys.column_partner[j];
+    const double value = partner >= 0 ? sel.theta[j] / sel.theta[partner] : sel.theta[j];
+    if (std::isfinite(value)) setParam(model, refs[sys.column_param[j]], value);
+  }
+  // Base types stay; a candidate type stays when its spring does.
+  std::vector<uint8_t> keep_type(candidate.bond_types.size(), 0);
+  for (int t = 0; t < first_candidate_type; ++t) keep_type[t] = 1;
+  for (const Group& g : sel.groups) {
+    if (g.bond_type < 0) {
+      if (!g.active)
+        for (int c = 0; c < 3; ++c) {
+          Param& p = model.gravity_mps2[c];
+          p = Param();
+          p.present = true;
+          p.has_value = true;
+        }
+      continue;
+    }
+    if (g.damper) {
+      if (!g.active) model.bond_types[g.bond_type].param(kDamping) = Param();
+      continue;
+    }
+    if (!g.active) continue;
+    const int t = g.bond_type;
+    keep_type[t] = 1;
+    const int ck = column_of.at({t, kStiffness}), ckl = column_of.at({t, -kRestLength - 1});
+    const double k = sel.theta[ck], kl = sel.theta[ckl];
+    const double length = kl / k;
+    Eigen::Vector3d v(k, length, 0.0), s(0.0, 0.0, 0.0);
+    s[0] = std::sqrt(std::max(0.0, cov(ck, ck)));
+    const double dl_dkl = 1.0 / k, dl_dk = -kl / (k * k);
+    s[1] = std::sqrt(std::max(0.0, dl_dkl * dl_dkl * cov(ckl, ckl) + dl_dk * dl_dk * cov(ck, ck) +
+                                       2.0 * dl_dkl * dl_dk * cov(ck, ckl)));
+    const auto damper = column_of.find({t, kDamping});
+    const bool damped = dampers && damper != column_of.end() && position.count(damper->second);
+    if (damped) {
+      v[2] = sel.theta[damper->second];
+      s[2] = std::sqrt(std::max(0.0, cov(damper->second, damper->second)));
+    }
+    if (!(k > 0.0) || !(length > 0.0)) out.bad_springs.push_back(t);
+    else if (damped && !(v[2] > 0.0)) out.bad_dampers.push_back(t);
+    BondType& type = model.bond_types[t];
+    type.param(kStiffness).value = k;
+    type.param(kRestLength).value = length;
+    if (damped) type.param(kDamping).value = v[2];
+    out.kept_types.push_back(t);
+    out.value.push_back(v);
+    out.sigma.push_back(s);
+    out.damped.push_back(damped ? 1 : 0);
+  }
+  // Drop the removed candidate types and their bonds (base types stay, indices kept in order).
+  Model pruned = model;
+  pruned.bond_types.clear();
+  pruned.bonds.clear();
+  std::vector<int> new_index(model.bond_types.size(), -1);
+  for (size_t t = 0; t < model.bond_types.size(); ++t)
+    if (static_cast<int>(t) < first_candidate_type || keep_type[t]) {
+      new_index[t] = static_cast<int>(pruned.bond_types.size());
+      pruned.bond_types.push_back(model.bond_types[t]);
+    }
+  for (const Bond& b : model.bonds)
+    if (new_index[b.type] >= 0) {
+      Bond nb = b;
+      nb.type = new_index[b.type];
+      pruned.bonds.push_back(nb);
+    }
+  out.model = std::move(pruned);
+  return out;
+}
+
+/// Bonds whose (k, L, c) agree within `sigmas` standard deviations share a type (greedy, in
+/// order of stiffness). Returns the typed model (candidate types renamed s00, s01, ...).
+Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, int* types_out) {
+  const Model& m = solved.model;
+  const int kept = static_cast<int>(solved.kept_types.size());
+  std::vector<int> order(kept);
+  for (int i = 0; i < kept; ++i) order[i] = i;
+  std::sort(order.begin(), order.end(),
+            [&](int a, int b) { return solved.value[a][0] < solved.value[b][0]; });
+  struct Cluster {
+    Eigen::Vector3d sum_w_v = Eigen::Vector3d::Zero(), sum_w = Eigen::Vector3d::Zero();
+    uint8_t damped = 0;
+    int first_member = -1;
+    Eigen::Vector3d mean() const { return sum_w_v.cwiseQuotient(sum_w); }
+    Eigen::Vector3d sigma() const { return sum_w.cwiseInverse().cwiseSqrt(); }
+  };
+  std::vector<Cluster> clusters;
+  std::vector<int> cluster_of(kept, -1);
+  for (int idx : order) {
+    const Eigen::Vector3d& v = solved.value[idx];
+    Eigen::Vector3d s = solved.sigma[idx];
+    // Round-off of the solve: values within 1e-6 (relative) are equal.
+    for (int d = 0; d < 3; ++d) s[d] = std::max(s[d], 1e-6 * std::max(std::fabs(v[d]), 1e-12));
+    int join = -1;
+    for (size_t c = 0; c < clusters.size() && join < 0; ++c) {
+      const Eigen::Vector3d mu = clusters[c].mean(), sc = clusters[c].sigma();
+      bool agree = clusters[c].damped == solved.damped[idx];  // a damper or none, alike
+      for (int d = 0; d < (solved.damped[idx] ? 3 : 2) && agree; ++d)
+        agree = std::fabs(v[d] - mu[d]) <= sigmas * std::sqrt(s[d] * s[d] + sc[d] * sc[d]);
+      if (agree) join = static_cast<int>(c);
+    }
+    if (join < 0) {
+      join = static_cast<int>(clusters.size());
+      clusters.emplace_back();
+      clusters.back().damped = solved.damped[idx];
+      clusters.back().first_member = idx;
+    }
+    const Eigen::Vector3d w = s.cwiseProduct(s).cwiseInverse();
+    clusters[join].sum_w_v += w.cwiseProduct(v);
+    clusters[join].sum_w += w;
+    cluster_of[idx] = join;
+  }
+  // The typed model: base types, then one type per cluster.
+  Model typed = m;
+  typed.bond_types.resize(first_candidate_type);
+  char name[32];
+  for (size_t c = 0; c < clusters.size(); ++c) {
+    // The layout (which parameters are free) of the cluster's first member.
+    BondType type = m.bond_types[first_candidate_type + clusters[c].first_member];
+    std::snprintf(name, sizeof(name), "s%02d", static_cast<int>(c));
+    type.name = name;
+    const Eigen::Vector3d mu = clusters[c].mean();
+    type.param(kStiffness).value = mu[0];
+    type.param(kRestLength).value = mu[1];
+    if (clusters[c].damped) type.param(kDamping).value = mu[2];
+    typed.bond_types.push_back(type);
+  }
+  // The kept candidate types of `m` follow the base types in kept order.
+  for (Bond& b : typed.bonds)
+    if (b.type >= first_candidate_type)
+      b.type = first_candidate_type + cluster_of[b.type - first_candidate_type];
+  *types_out = static_cast<int>(clusters.size());
+  return typed;
+}
+
+void heldOutErrors(const Model& model, const Trajectory& held, StructureCandidate* c) {
+  try {
+    const PredictionReport r = evaluatePredictions(model, held, {1, 5, 10});
+    for (const PredictionError& row : r.rows)
+      if (row.predictor == Predictor::kModel)
+        for (int k = 0; k < 3; ++k)
+          if (row.horizon == kHorizons[k]) c->held_out_rms_m[k] = row.rms_m;
+    c->rollout_bounded = r.rollout_bounded;
+  } catch (const InputError&) {
+    for (double& e : c->held_out_rms_m) e = kNan;
+  }
+}
+
+/// Pairs outside `have` that the residual of `model` (every value set) asks for: for each pair,
+/// the part of the one-step residual a spring between them (tension k l - k L along the pair)
+/// would explain, c^T G^-1 c over the frames where both are seen. Returns the pairs explaining
+/// more than 20 ln(N) times the residual's mean square (a pair of parameters' BIC price with a
+/// wide margin, so that noise adds nothing), the most first, at most `most`; none when the
+/// residual's RMS is below `floor_rms_m` (nothing is missing).
+std::vector<std::pair<int, int>> missingPairs(const Model& model, const Trajectory& data,
+                                              const std::set<std::pair<int, int>>& have,
+                                              double floor_rms_m, int most) {
+  const int n = static_cast<int>(model.particles.size()), frames = data.numFrames();
+  const double h = 1.0 / model.frame_rate_hz;
+  Simulator simulator(model);
+  State state;
+  state.x_m.resize(n);
+  state.v_mps.resize(n);
+  std::vector<Eigen::Vector3d> force;
+  // Per frame, the weighted residual of every particle seen at t-1, t, t+1 (NaN otherwise).
+  std::vector<std::vector<Eigen::Vector3d>> residual(frames);
+  for (int t = 1; t + 1 < frames; ++t) {
+    std::vector<uint8_t> seen(n);
+    for (int i = 0; i < n; ++i) {
+      seen[i] = !data.isOccluded(t - 1, i) && !data.isOccluded(t, i) && !data.isOccluded(t + 1, i);
+      state.x_m[i] = seen[i] ? data.position(t, i) : model.particles[i].position_m;
+      state.v_mps[i] = seen[i] ? Eigen::Vector3d((data.position(t, i) - data.position(t - 1, i)) / h)
+                               : Eigen::Vector3d::Zero();
+      if (model.particles[i].fixed) state.v_mps[i] = model.particles[i].velocity_mps;
+    }
+    simulator.computeForces(state, &force);
+    residual[t].assign(n, Eigen::Vector3d::Constant(kNan));
+    for (int i = 0; i < n; ++i) {
+      if (!seen[i] || model.particles[i].fixed) continue;
+      const double m = model.particles[i].mass_kg;
+      const Eigen::Vector3d a = (data.position(t + 1, i) - 2.0 * data.position(t, i) + data.position(t - 1, i)) / (h * h);
+      residual[t][i] = h * h / m * (m * a - force[i]);
+    }
+  }
+  double sum2 = 0.0;
+  long rows = 0;
+  for (const auto& frame : residual)
+    for (const Eigen::Vector3d& r : frame)
+      if (r.allFinite()) {
+        sum2 += r.squaredNorm();
+        rows += 3;
+      }
+  if (rows == 0 || std::sqrt(sum2 / rows) < floor_rms_m) return {};
+  const double threshold_m2 = 20.0 * std::log(static_cast<double>(rows)) * sum2 / rows;
+  std::vector<std::pair<double, std::pair<int, int>>> scored;
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b) {
+      if (have.count({a, b}) || (model.particles[a].fixed && model.particles[b].fixed)) continue;
+      Eigen::Matrix2d g = Eigen::Matrix2d::Zero();
+      Eigen::Vector2d c = Eigen::Vector2d::Zero();
+      for (int t = 1; t + 1 < frames; ++t) {
+        if (residual[t].empty()) continue;
+        const Eigen::Vector3d d = data.position(t, b) - data.position(t, a);
+        const double l = d.norm();
+        if (!(l > 0.0) || data.isOccluded(t, a) || data.isOccluded(t, b)) continue;
+        const Eigen::Vector3d u = d / l;
+        // Tension f = k l - (k L): on a, +f u; on b, -f u (rows weighted h^2 / m).
+        for (int side = 0; side < 2; ++side) {
+          const int i = side == 0 ? a : b;
+          if (model.particles[i].fixed || !residual[t][i].allFinite()) continue;
+          const double w = (side == 0 ? 1.0 : -1.0) * h * h / model.particles[i].mass_kg;
+          const double r = residual[t][i].dot(u);
+          const Eigen::Vector2d f(w * l, -w);
+          g += f * f.transpose();
+          c += f * r;
+        }
+      }
+      if (!(g.determinant() > 0.0)) continue;
+      const double explained = c.dot(g.ldlt().solve(c));
+      if (explained > threshold_m2) scored.push_back({-explained, {a, b}});
+    }
+  std::sort(scored.begin(), scored.end());
+  std::vector<std::pair<int, int>> out;
+  for (size_t k = 0; k < scored.size() && static_cast<int>(out.size()) < most; ++k)
+    out.push_back(scored[k].second);
+  return out;
+}
+
+}  // namespace
+
+StructureResult selectStructure(const Model& model, const Trajectory& data,
+                                const StructureOptions& options) {
+  const auto say = [&](const std::string& line) {
+    if (options.progress) options.progress(line);
+  };
+  if (!model.interactions.empty())
+    throw InputError("structure selection: the model has interactions (bonds found on the fly); "
+                     "give the particles and fixed bonds only");
+  const int frames = data.numFrames();
+  const int held_frames = std::max(15, static_cast<int>(std::lround(options.held_out_share * frames)));
+  const int fit_frames = frames - held_frames;
+  if (fit_frames < 20)
+    throw InputError("structure selection: " + std::to_string(frames) + " frames are too few (need " +
+                     "at least " + std::to_string(20 + held_frames) + ": 20 to fit, " +
+                     std::to_string(held_frames) + " held out)");
+  StructureResult result;
+  result.fitted_frames = fit_frames;
+  result.held_out_frames = held_frames;
+  const Trajectory fit = sliceFrames(data, 0, fit_frames);
+  // The held-out slice starts two frames early: the first held-out frame is a prediction's start.
+  const Trajectory held = sliceFrames(data, fit_frames - 2, held_frames + 2);
+
+  const std::vector<std::pair<int, int>> pairs = candidatePairs(model, fit, options);
+  result.candidate_bonds = static_cast<int>(pairs.size());
+  std::set<std::pair<int, int>> all_candidates(pairs.begin(), pairs.end());
+  if (pairs.empty()) throw InputError("structure selection: no candidate pair of particles");
+  say("structure: " + std::to_string(pairs.size()) + " candidate bonds among " +
+      std::to_string(model.particles.size()) + " particles; " + std::to_string(fit_frames) +
+      " frames fitted, " + std::to_string(held_frames) + " held out");
+
+  // Model-free guesses on the held-out frames (NaN when no start there has every particle seen).
+  for (auto& row : result.guess_rms_m)
+    for (double& e : row) e = kNan;
+  try {
+    const PredictionReport r = evaluatePredictions(model, held, {1, 5, 10}, 0.0);
+    for (const PredictionError& row : r.rows)
+      for (int k = 0; k < 3; ++k)
+        if (row.horizon == kHorizons[k] && row.predictor != Predictor::kModel)
+          result.guess_rms_m[static_cast<int>(row.predictor) - 1][k] = row.rms_m;
+  } catch (const InputError& e) {
+    result.notes.push_back(std::string("no held-out prediction: ") + e.what());
+  }
+
+  // Raw differences (exact on noiseless data with one step per frame) unless the markers' noise
+  // is estimated at 1 um or more (real captures: 10 um to 1 mm): then smoothed kinematics. (Not
+  // the identifier's test of an exact one-step fit: with bonds still missing from the candidates
+  // no fit is exact.)
+  EquationErrorOptions ee;
+  {
+    const double noise_m = estimateMarkerNoise(fit);
+    if (noise_m >= 1e-6) ee.smoothing_half_width = 4;
+    char line[160];
+    std::snprintf(line, sizeof(line), "structure: marker noise estimated %.3g m; equation error on %s kinematics",
+                  noise_m, ee.smoothing_half_width > 0 ? "smoothed" : "raw");
+    say(line);
+  }
+
+  const int first_candidate_type = static_cast<int>(model.bond_types.size());
+  std::vector<StructureCandidate> candidates;
+  for (int level = 0; level < (options.try_dampers ? 2 : 1); ++level) {
+    const bool dampers = level == 1;
+    StructureCandidate cand;
+    cand.name = dampers ? "springs+dampers" : "springs";
+    Model full = model;
+    addCandidateBonds(&full, pairs, fit, dampers);
+    std::vector<Group> groups;
+    std::set<int> grouped;
+    int screening_rounds = 0;
+    for (int pass = 0; pass < kMaxPasses; ++pass) {
+      const EquationErrorSystem sys = buildEquationErrorSystem(full, fit, ee);
+      if (!sys.reason.empty())
+        throw InputError("structure selection: the equation error does not apply: " + sys.reason);
+      const std::vector<ParamRef> refs = freeParameters(full);
+      groups.clear();
+      std::map<int, int> spring_group_of_type;
+      std::vector<int> always;
+      Group gravity;
+      for (size_t j = 0; j < sys.column_param.size(); ++j) {
+        const ParamRef& r = refs[sys.column_param[j]];
+        if (r.bond_type < 0) {
+          gravity.columns.push_back(static_cast<int>(j));
+          continue;
+        }
+        if (r.bond_type < first_candidate_type) {
+          always.push_back(static_cast<int>(j));
+          continue;
+        }
+        if (r.param == kDamping) {
+          Group g;
+          g.columns = {static_cast<int>(j)};
+          g.bond_type = r.bond_type;
+          g.damper = true;
+          groups.push_back(g);
+          continue;
+        }
+        auto it = spring_group_of_type.find(r.bond_type);
+        if (it == spring_group_of_type.end()) {
+          Group g;
+          g.bond_type = r.bond_type;
+          spring_group_of_type[r.bond_type] = static_cast<int>(groups.size());
+          groups.push_back(g);
+          it = spring_group_of_type.find(r.bond_type);
+        }
+        groups[it->second].columns.push_back(static_cast<int>(j));
+      }
+      for (size_t g = 0; g < groups.size(); ++g)
+        if (groups[g].damper) groups[spring_group_of_type.at(groups[g].bond_type)].child = static_cast<int>(g);
+      if (!gravity.columns.empty()) groups.push_back(gravity);
+      // Columns no row touches (a pair never seen) start inactive.
+      for (Group& g : groups)
+        for (int c : g.columns)
+          if (!(sys.ata(c, c) > 0.0)) g.active = false;
+      // The noise level of the full candidate model's residual, floored at round-off.
+      std::vector<int> all = activeColumns(groups, always);
+      const Eigen::VectorXd theta_all = solveActive(sys, all, nullptr, nullptr);
+      const double rms_b = std::sqrt(sys.btb / std::max<size_t>(sys.rows, 1));
+      // Round-off of the equation error (conditioning included) on exact data: 1e-6 of the rows' RMS.
+      const double floor2 = std::pow(1e-6 * rms_b, 2);
+      const double dof = std::max(1.0, static_cast<double>(sys.rows) - static_cast<double>(all.size()));
+      const double sigma2 = std::max(rss(sys, theta_all) / dof, floor2);
+      {
+        char line[200];
+        std::snprintf(line, sizeof(line), "structure: %s: %zu unknowns over %zu equations (residual "
+                      "RMS %.3g m, rhs RMS %.3g m); eliminating", cand.name.c_str(), all.size(),
+                      sys.rows, std::sqrt(rss(sys, theta_all) / std::max<size_t>(sys.rows, 1)), rms_b);
+        say(line);
+      }
+      Selection sel = eliminate(sys, groups, always, sigma2, options.progress);
+      Solved solved = describe(full, sys, sel, sigma2, first_candidate_type, dampers);
+      // Bonds the neighbourhoods missed (long ones): pairs the residual asks for become
+      // candidates too, and the selection runs again (at most 4 rounds of 20). Before the
+      // non-physical drops: a missing bond makes true ones come out wrong.
+      if (screening_rounds < 4 && pass + 1 < kMaxPasses) {
+        std::set<std::pair<int, int>> have;
+        for (const Bond& b : full.bonds)
+          if (kindArity(full.bond_types[b.type].kind) == 2) have.insert(std::minmax(b.particles[0], b.particles[1]));
+        const std::vector<std::pair<int, int>> more =
+            missingPairs(solved.model, fit, have, 10.0 * std::sqrt(floor2), 20);
+        ++screening_rounds;
+        if (!more.empty()) {
+          addCandidateBonds(&full, more, fit, dampers);
+          all_candidates.insert(more.begin(), more.end());
+          result.candidate_bonds = static_cast<int>(all_candidates.size());
+          say("structure: " + cand.name + ": " + std::to_string(more.size()) +
+              " pair(s) outside the neighbourhoods explain the residual: candidates too");
+          continue;
+        }
+      }
+      if ((!solved.bad_springs.empty() || !solved.bad_dampers.empty()) && pass + 1 < kMaxPasses) {
+        // Kept bonds that came out non-physical lose their spring (the bond goes) or their
+        // damper; then the system is solved again. A type without a bond keeps no free value.
+        std::set<int> bad(solved.bad_springs.begin(), solved.bad_springs.end());
+        std::vector<Bond> bonds;
+        for (const Bond& b : full.bonds)
+          if (!bad.count(b.type)) bonds.push_back(b);
+        full.bonds = bonds;
+        for (int t : solved.bad_springs) {
+          BondType& type = full.bond_types[t];
+          type.param(kStiffness).free = false;
+          type.param(kStiffness).value = 0.0;
+          type.param(kRestLength).free = false;
+          type.param(kDamping) = Param();
+        }
+        for (int t : solved.bad_dampers) full.bond_types[t].param(kDamping) = Param();
+        say("structure: " + cand.name + ": " + std::to_string(solved.bad_springs.size()) +
+            " non-physical spring(s) and " + std::to_string(solved.bad_dampers.size()) +
+            " damper(s) dropped; solving again");
+        continue;
+      }
+      if (!solved.bad_springs.empty() || !solved.bad_dampers.empty())
+        result.notes.push_back(cand.name + ": non-physical values remained after " +
+                               std::to_string(kMaxPasses) + " passes");
+      // Types: one per bond, or shared where the values agree; the criterion decides.
+      const double untyped_bic = bic(sel.rss_m2, sys.rows, sel.parameters, floor2);
+      int types = 0;
+      Model typed = typeBonds(solved, first_candidate_type, options.type_sigmas, &types);
+      // Types with no bond left (non-physical drops) do not exist in `solved.model`; typed too.
+      const EquationErrorResult typed_fit = solveEquationError(typed, fit, ee);
+      const int typed_params = static_cast<int>(freeParameters(typed).size());
+      Model chosen = solved.model;
+      double fit_rss = sel.rss_m2;
+      int params = sel.parameters;
+      double chosen_bic = untyped_bic;
+      if (typed_fit.applicable) {
+        const double typed_rss = typed_fit.residual_rms_m * typed_fit.residual_rms_m * typed_fit.rows;
+        const double typed_bic = bic(typed_rss, typed_fit.rows, typed_params, floor2);
+        {
+          char line[240];
+          std::snprintf(line, sizeof(line), "structure: %s: %d bonds in %d types: residual RMS %.3g m "
+                        "(one type per bond: %.3g m), BIC %.6g against %.6g", cand.name.c_str(),
+                        static_cast<int>(typed.bonds.size()), types,
+                        typed_fit.residual_rms_m, std::sqrt(sel.rss_m2 / std::max<size_t>(sys.rows, 1)),
+                        typed_bic, untyped_bic);
+          say(line);
+        }
+        if (typed_bic <= untyped_bic) {
+          bool usable = true;
+          for (double v : typed_fit.values) usable = usable && std::isfinite(v);
+          if (usable) {
+            setValues(typed, freeParameters(typed), typed_fit.values);
+            chosen = typed;
+            fit_rss = typed_rss;
+            params = typed_params;
+            chosen_bic = typed_bic;
+          }
+        }
+      }
+      cand.model = chosen;
+      cand.bonds = static_cast<int>(chosen.bonds.size());
+      cand.bond_types = static_cast<int>(chosen.bond_types.size());
+      cand.parameters = params;
+      cand.fit_rms_m = std::sqrt(fit_rss / std::max<size_t>(sys.rows, 1));
+      cand.bic = chosen_bic;
+      break;
+    }
+    if (options.refit) {
+      IdentifyOptions io = options.identify;
+      io.cost = CostChoice::kShortTerm;  // ranking only: the final fit is the caller's
+      io.generations = std::min(io.generations, options.refit_generations);
+      io.max_wall_time_s = io.max_wall_time_s > 0.0 ? std::min(io.max_wall_time_s, options.refit_max_s)
+                                                    : options.refit_max_s;
+      io.estimate_std = false;
+      const IdentifyResult r = identifyModel(cand.model, fit, io);
+      cand.model = r.model;
+      cand.refit_cost_m2 = r.global_cost;
+    }
+    heldOutErrors(cand.model, held, &cand);
+    char line[256];
+    std::snprintf(line, sizeof(line),
+                  "structure: %s: %d bonds, %d types, %d parameters; held-out RMS 1/5/10 frames "
+                  "ahead %.3g / %.3g / %.3g mm",
+                  cand.name.c_str(), cand.bonds, cand.bond_types, cand.parameters,
+                  1e3 * cand.held_out_rms_m[0], 1e3 * cand.held_out_rms_m[1],
+                  1e3 * cand.held_out_rms_m[2]);
+    say(line);
+    candidates.push_back(std::move(cand));
+  }
+  // The held-out 10-frame error decides; within 2 % of the best, the criterion (then fewer
+  // parameters) does.
+  double best_err = std::numeric_limits<double>::infinity();
+  for (const StructureCandidate& c : candidates)
+    if (std::isfinite(c.held_out_rms_m[2])) best_err = std::min(best_err, c.held_out_rms_m[2]);
+  int chosen = -1;
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    const StructureCandidate& c = candidates[i];
+    const bool near = !std::isfinite(best_err) || (std::isfinite(c.held_out_rms_m[2]) &&
+                                                   c.held_out_rms_m[2] <= 1.02 * best_err);
+    if (!near) continue;
+    if (chosen < 0 || c.parameters < candidates[chosen].parameters ||
+        (c.parameters == candidates[chosen].parameters && c.bic < candidates[chosen].bic))
+      chosen = static_cast<int>(i);
+  }
+  candidates[chosen].chosen = true;
+  result.model = candidates[chosen].model;
+  result.candidates = std::move(candidates);
+  return result;
+}
+
+StructureScore scoreStructure(const Model& truth, const Model& chosen) {
+  const auto key = [](const Model& m, const Bond& b) {
+    std::string a = m.particles[b.particles[0]].name, c = m.particles[b.particles[1]].name;
+    if (c < a) std::swap(a, c);
+    return std::make_pair(a, c);
+  };
+  std::map<std::pair<std::string, std::string>, const BondType*> want, got;
+  for (const Bond& b : truth.bonds)
+    if (kindArity(truth.bond_types[b.type].kind) == 2) want[key(truth, b)] = &truth.bond_types[b.type];
+  for (const Bond& b : chosen.bonds)
+    if (kindArity(chosen.bond_types[b.type].kind) == 2) got[key(chosen, b)] = &chosen.bond_types[b.type];
+  StructureScore s;
+  int hit = 0;
+  for (const auto& g : got) hit += want.count(g.first) ? 1 : 0;
+  s.precision = got.empty() ? 0.0 : static_cast<double>(hit) / got.size();
+  s.recall = want.empty() ? 0.0 : static_cast<double>(hit) / want.size();
+  s.f1 = s.precision + s.recall > 0.0 ? 2.0 * s.precision * s.recall / (s.precision + s.recall) : 0.0;
+  s.types = static_cast<int>(chosen.bond_types.size());
+  s.damped_everywhere = s.damped_nowhere = true;
+  for (const BondType& t : chosen.bond_types) {
+    const bool damped = t.value(kDamping) != 0.0;
+    s.damped_everywhere = s.damped_everywhere && damped;
+    s.damped_nowhere = s.damped_nowhere && !damped;
+  }
+  for (const auto& w : want) {
+    const auto g = got.find(w.first);
+    if (g == got.end()) continue;
+    for (ParamId id : {kStiffness, kRestLength, kDamping}) {
+      const double truth_value = w.second->value(id);
+      if (truth_value == 0.0) continue;
+      s.max_relative_error = std::max(
+          s.max_relative_error, std::fabs(g->second->value(id) - truth_value) / std::fabs(truth_value));
+    }
+  }
+  return s;
+}
+
+std::string formatStructureReport(const StructureResult& r) {
+  std::ostringstream out;
+  char line[320];
+  std::snprintf(line, sizeof(line),
+                "structure selection: %d candidate bonds; %d frames fitted, %d held out\n",
+                r.candidate_bonds, r.fitted_frames, r.held_out_frames);
+  out << line;
+  std::snprintf(line, sizeof(line), "%-18s %6s %6s %6s %12s %12s %12s %10s %10s %10s %8s %s\n",
+                "candidate", "bonds", "types", "params", "fit_rms_m", "bic", "refit_m2",
+                "held1_mm", "held5_mm", "held10_mm", "bounded", "");
+  out << line;
+  for (const StructureCandidate& c : r.candidates) {
+    std::snprintf(line, sizeof(line),
+                  "%-18s %6d %6d %6d %12.4g %12.6g %12.4g %10.4g %10.4g %10.4g %8s %s\n",
+                  c.name.c_str(), c.bonds, c.bond_types, c.parameters, c.fit_rms_m, c.bic,
+                  c.refit_cost_m2, 1e3 * c.held_out_rms_m[0], 1e3 * c.held_out_rms_m[1],
+                  1e3 * c.held_out_rms_m[2], c.rollout_bounded ? "yes" : "no",
+                  c.chosen ? "<- chosen" : "");
+    out << line;
+  }
+  const char* guesses[3] = {"constant_velocity", "constant_acceleration", "gravity_only"};
+  for (int g = 0; g < 3; ++g) {
+    std::snprintf(line, sizeof(line), "%-18s %6s %6s %6s %12s %12s %12s %10.4g %10.4g %10.4g\n",
+                  guesses[g], "-", "-", "0", "-", "-", "-", 1e3 * r.guess_rms_m[g][0],
+                  1e3 * r.guess_rms_m[g][1], 1e3 * r.guess_rms_m[g][2]);
+    out << line;
+  }
+  for (const std::string& n : r.notes) out << "note: " << n << "\n";
+  return out.str();
+}
+
+std::string structureReportCsv(const StructureResult& r) {
+  std::ostringstream out;
+  out << "name,bonds,bond_types,parameters,fit_rms_m,bic,refit_cost_m2,held_out_rms_1_m,"
+         "held_out_rms_5_m,held_out_rms_10_m,rollout_bounded,chosen\n";
+  char line[400];
+  for (const StructureCandidate& c : r.candidates) {
+    std::snprintf(line, sizeof(line), "%s,%d,%d,%d,%.6g,%.9g,%.6g,%.6g,%.6g,%.6g,%d,%d\n",
+                  c.name.c_str(), c.bonds, c.bond_types, c.parameters, c.fit_rms_m, c.bic,
+                  c.refit_cost_m2, c.held_out_rms_m[0], c.held_out_rms_m[1], c.held_out_rms_m[2],
+                  c.rollout_bounded ? 1 : 0, c.chosen ? 1 : 0);
+    out << line;
+  }
+  const char* guesses[3] = {"constant_velocity", "constant_acceleration", "gravity_only"};
+  for (int g = 0; g < 3; ++g) {
+    std::snprintf(line, sizeof(line), "%s,,,0,,,,%.6g,%.6g,%.6g,,0\n", guesses[g],
+                  r.guess_rms_m[g][0], r.guess_rms_m[g][1], r.guess_rms_m[g][2]);
+    out << line;
+  }
+  return out.str();
+}
+
+}  // namespace mme

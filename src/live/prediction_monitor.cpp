@@ -1,0 +1,48 @@
+#include "motion_model_estimation/live/prediction_monitor.h"
+
+#include <utility>
+
+#include "motion_model_estimation/core/error.h"
+
+namespace mme {
+
+PredictionMonitor::PredictionMonitor(std::vector<int> horizons, double period_s)
+    : horizons_(std::move(horizons)), period_s_(period_s) {
+  if (horizons_.empty()) throw InputError("prediction monitor: no horizon");
+  for (int k : horizons_)
+    if (k < 1) throw InputError("prediction monitor: horizon " + std::to_string(k) + " < 1");
+  if (!(period_s_ > 0.0)) throw InputError("prediction monitor: period must be > 0 s");
+}
+
+bool PredictionMonitor::due(double now_s) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return !tried_ || now_s - last_try_s_ >= period_s_;
+}
+
+bool PredictionMonitor::evaluate(double now_s, const Model& model, const Trajectory& window) {
+  std::optional<PredictionReport> report;
+  std::string error;
+  try {
+    report = evaluatePredictions(model, window, horizons_);
+  } catch (const InputError& e) {
+    error = e.what();
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  tried_ = true;
+  last_try_s_ = now_s;
+  report_ = std::move(report);
+  error_ = std::move(error);
+  return report_.has_value();
+}
+
+std::optional<PredictionReport> PredictionMonitor::report() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return report_;
+}
+
+std::string PredictionMonitor::lastError() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return error_;
+}
+
+}  // namespace mme
