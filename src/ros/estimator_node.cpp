@@ -369,8 +369,10 @@ void EstimatorNode::onStatsTimer(const ros::WallTimerEvent&) {
   stats.latency = latency_stats_.summary();
   if (predictions_) {
     const double now_s = steadyNowS();
-    if (predictions_->due(now_s) && estimator_->estimate().valid)
-      predictions_->evaluate(now_s, estimator_->currentModel(), estimator_->window());
+    if (predictions_->due(now_s) && estimator_->estimate().valid &&
+        !predictions_->evaluate(now_s, estimator_->currentModel(), estimator_->window()))
+      ROS_WARN_THROTTLE(60.0, "estimator_node: no prediction figures on this window: %s",
+                        predictions_->lastError().c_str());
     stats.prediction = predictions_->report();
   }
   std_msgs::String msg;
