@@ -645,7 +645,6 @@ StructureResult selectStructure(const Model& model, const Trajectory& data,
     Model full = model;
     addCandidateBonds(&full, pairs, fit, dampers);
     std::vector<Group> groups;
-    std::set<int> grouped;
     int screening_rounds = 0;
     for (int pass = 0; pass < kMaxPasses; ++pass) {
       const EquationErrorSystem sys = buildEquationErrorSystem(full, fit, ee);

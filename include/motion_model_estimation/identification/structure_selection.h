@@ -2,14 +2,14 @@
 // markers (identify --select-structure).
 //
 // 1. Candidate bonds from the fitted frames: each particle's nearest neighbours by mean distance,
-//    and every pair whose distance varies little (a near-rigid pair); bonds already in the model
-//    stay as they are.
+//    and every pair whose distance varies little (a near-rigid pair); later, pairs the residual
+//    asks for (long bonds the neighbourhoods missed). Bonds already in the model stay as they are.
 // 2. Candidate components in rising complexity: springs; springs + dampers. For each, one spring
 //    type per candidate bond, and the equation error (forces linear in k, k L, c; gravity when
 //    the model's gravity is free) is thinned by grouped backward elimination: the group (a
 //    bond's spring, a bond's damper, gravity) whose removal raises the residual least goes while
 //    that rise is below the Bayesian information criterion's price of its parameters; a damper
-//    never outlives its spring.
+//    never outlives its spring. Bonds that come out non-physical are dropped and it runs again.
 // 3. Bond typing: bonds whose solved (k, L, c) agree within 3 of their standard deviations share
 //    a type, kept when the criterion says the merged model is as good.
 // 4. Each level's typed model is refitted by the full identification (identifyModel) on the
