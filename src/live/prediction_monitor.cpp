@@ -1,5 +1,6 @@
 #include "motion_model_estimation/live/prediction_monitor.h"
 
+#include <exception>
 #include <utility>
 
 #include "motion_model_estimation/core/error.h"
@@ -24,7 +25,7 @@ bool PredictionMonitor::evaluate(double now_s, const Model& model, const Traject
   std::string error;
   try {
     report = evaluatePredictions(model, window, horizons_);
-  } catch (const InputError& e) {
+  } catch (const std::exception& e) {  // a diagnostic: any failure is reported, never thrown
     error = e.what();
   }
   std::lock_guard<std::mutex> lock(mutex_);

@@ -1,6 +1,7 @@
-// The live node's ~stats line: its input ledger, clock jumps, updates and their gaps, and the
-// arrival -> ~markers latency, the model's open-loop predictions on the window, as "key=value" fields separated by spaces (scripts and the soak
-// driver parse them by key). No ROS here.
+// The live node's ~stats line: its input ledger, clock jumps, updates and their gaps, the
+// arrival -> ~markers latency and the model's open-loop predictions on the window, as
+// "key=value" fields separated by spaces (scripts and the soak driver parse them by key). No ROS
+// here.
 #pragma once
 
 #include <cstdint>
