@@ -9,6 +9,12 @@
 
 namespace mme {
 
+namespace {
+/// A start's velocity comes from the latest frame before it, at most this many back, where the
+/// particle is seen.
+constexpr int kMaxVelocityGap = 3;
+}  // namespace
+
 const char* predictorName(Predictor predictor) {
   switch (predictor) {
     case Predictor::kModel: return "model";
@@ -39,22 +45,42 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
   std::vector<double> sum2(horizons.size() * predictors, 0.0);
   std::vector<long> count(horizons.size() * predictors, 0);
   int first_start = -1;
-  State s;
+  State s, first_state;
+  std::vector<int> back(n);
   for (int t = 2; t + 1 < frames; ++t) {
-    bool seen = true;
-    for (int i = 0; i < n && seen; ++i)
-      seen = !obs.isOccluded(t, i) && !obs.isOccluded(t - 1, i) && !obs.isOccluded(t - 2, i);
-    if (!seen) continue;
+    // A start needs every particle's position at t and its velocity: from the latest of the
+    // kMaxVelocityGap frames before t where it is seen (x(t-1) when seen: the paper's start).
+    // A fixed particle moves as the model says, seen or not.
+    bool usable = true;
+    for (int i = 0; i < n && usable; ++i) {
+      back[i] = 0;
+      if (model.particles[i].fixed) continue;
+      if (obs.isOccluded(t, i)) {
+        usable = false;
+        break;
+      }
+      for (int j = 1; j <= kMaxVelocityGap && t - j >= 0 && back[i] == 0; ++j)
+        if (!obs.isOccluded(t - j, i)) back[i] = j;
+      usable = back[i] > 0;
+    }
+    if (!usable) continue;
     ++report.starts;
-    if (first_start < 0) first_start = t;
-    // The model's open-loop motion from the paper's start, up to the longest horizon in reach.
+    // The model's open-loop motion from the start, up to the longest horizon in reach.
     const int reach = std::min(max_k, frames - 1 - t);
     s.x_m.assign(n, Eigen::Vector3d::Zero());
     s.v_mps.assign(n, Eigen::Vector3d::Zero());
     for (int i = 0; i < n; ++i) {
-      s.x_m[i] = x(t, i);
-      s.v_mps[i] = model.particles[i].fixed ? model.particles[i].velocity_mps
-                                            : Eigen::Vector3d((x(t, i) - x(t - 1, i)) / h);
+      if (model.particles[i].fixed) {
+        s.x_m[i] = obs.isOccluded(t, i) ? model.particles[i].position_m : Eigen::Vector3d(x(t, i));
+        s.v_mps[i] = model.particles[i].velocity_mps;
+      } else {
+        s.x_m[i] = x(t, i);
+        s.v_mps[i] = (x(t, i) - x(t - back[i], i)) / (back[i] * h);
+      }
+    }
+    if (first_start < 0) {
+      first_start = t;
+      first_state = s;
     }
     std::vector<std::vector<Eigen::Vector3d>> path(reach + 1);
     path[0] = s.x_m;
@@ -67,7 +93,10 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
       if (K > reach) continue;
       const double kk = 0.5 * K * (K + 1);
       for (int i = 0; i < n; ++i) {
-        if (model.particles[i].fixed || obs.isOccluded(t + K, i)) continue;
+        // Scored where every predictor is defined: the particle seen at t-2, t-1, t and t+K.
+        if (model.particles[i].fixed || obs.isOccluded(t + K, i) || obs.isOccluded(t - 1, i) ||
+            obs.isOccluded(t - 2, i))
+          continue;
         const Eigen::Vector3d d1 = x(t, i) - x(t - 1, i);
         const Eigen::Vector3d d2 = x(t, i) - 2.0 * x(t - 1, i) + x(t - 2, i);
         const Eigen::Vector3d guess[4] = {path[K][i], x(t, i) + K * d1, x(t, i) + K * d1 + kk * d2,
@@ -81,7 +110,8 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
     }
   }
   if (report.starts == 0)
-    throw InputError("no frame with every particle seen three frames in a row: nothing to predict from");
+    throw InputError("no frame with every particle seen and seen again within " +
+                     std::to_string(kMaxVelocityGap) + " frames before it: nothing to predict from");
   for (size_t hi = 0; hi < horizons.size(); ++hi)
     for (size_t p = 0; p < predictors; ++p) {
       PredictionError row;
@@ -104,11 +134,7 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
   const Eigen::Vector3d centre = 0.5 * (lo + hi);
   const double limit_m = 10.0 * std::max((hi - lo).norm(), 1e-3);
   report.rollout_frames = static_cast<int>(rollout_factor * frames);
-  for (int i = 0; i < n; ++i) {
-    s.x_m[i] = x(first_start, i);
-    s.v_mps[i] = model.particles[i].fixed ? model.particles[i].velocity_mps
-                                          : Eigen::Vector3d((x(first_start, i) - x(first_start - 1, i)) / h);
-  }
+  s = first_state;
   report.rollout_bounded = true;
   for (int k = 0; k < report.rollout_frames && report.rollout_bounded; ++k) {
     sim.stepFrame(&s, h);

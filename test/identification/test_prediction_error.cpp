@@ -1,6 +1,7 @@
 // The prediction judge: the true model predicts its own motion exactly at every horizon and the
 // model-free guesses do not; each guess is exact on the motion it assumes; occluded targets do
-// not count; a model that blows up is caught by the rollout; bad horizons are refused.
+// not count and a start tolerates short gaps; a model that blows up is caught by the rollout;
+// bad horizons are refused.
 #include <gtest/gtest.h>
 
 #include "motion_model_estimation/core/error.h"
@@ -52,10 +53,20 @@ TEST(PredictionError, EachGuessIsExactOnTheMotionItAssumes) {
   EXPECT_LT(predictionRms(r, 3, Predictor::kConstantAcceleration), 1e-10);
   EXPECT_GT(predictionRms(r, 3, Predictor::kConstantVelocity), 1e-3);
   const long all = r.rows[0].samples;
-  data.occluded[20 * 2 + 1] = 1;  // particle 1 at frame 20: one target less, three starts less
+  // Particle 1 unseen at frame 20: no start there (its position is unknown), the next two start
+  // with its velocity from frame 19, and it is scored neither at frame 20 nor from those starts.
+  data.occluded[20 * 2 + 1] = 1;
   const mme::PredictionReport o = mme::evaluatePredictions(fall, data, {3});
-  EXPECT_LT(o.rows[0].samples, all);
-  EXPECT_EQ(o.starts, r.starts - 3);
+  EXPECT_EQ(o.starts, r.starts - 1);
+  // Lost: both particles at start 20, particle 1 at starts 21 and 22, its target 20 (start 17).
+  EXPECT_EQ(o.rows[0].samples, all - 3 * (2 + 2 + 1));
+  // Particle 1 unseen every third frame: there are still starts (velocity from two frames
+  // back), and what is scored stays exact.
+  for (int t = 5; t < 40; t += 3) data.occluded[t * 2 + 1] = 1;
+  const mme::PredictionReport gaps = mme::evaluatePredictions(fall, data, {3});
+  EXPECT_GT(gaps.starts, 10);
+  EXPECT_GT(gaps.rows[0].samples, 0);
+  EXPECT_LT(predictionRms(gaps, 3, Predictor::kModel), 1e-12);
 }
 
 TEST(PredictionError, ARolloutThatBlowsUpIsCaughtAndBadInputIsRefused) {

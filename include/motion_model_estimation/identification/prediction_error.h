@@ -25,18 +25,20 @@ struct PredictionError {
 
 struct PredictionReport {
   std::vector<PredictionError> rows;  ///< per horizon, the four predictors in enum order
-  int starts = 0;                     ///< start frames used (x(t-2), x(t-1), x(t) all observed)
+  int starts = 0;                     ///< start frames used
   /// A rollout of the model from the first start, `rollout_frames` long, stays finite and within
   /// 10x the data's extent around its centre.
   bool rollout_bounded = false;
   int rollout_frames = 0;
 };
 
-/// Every prediction starts at a frame t where every particle is seen at t-2, t-1 and t: the model
-/// from x(t) with v = (x(t) - x(t-1)) / h (the paper's start), the guesses from the same frames;
-/// each is compared with the observed x(t + K) of every free particle. `model` carries every free
-/// value; `trajectory` has its particles as markers. Throws InputError on unusable input (no
-/// frame rate, horizons < 1, too few frames for a start).
+/// A prediction starts at every frame t where every free particle is seen, and seen again at most
+/// 3 frames before: the model from x(t) with v = (x(t) - x(t-j)) / (j h) for the latest such
+/// frame t-j (j = 1, the paper's start, wherever the particle is seen at t-1). A particle is
+/// scored at x(t + K) when it is seen there and at t-2, t-1 and t (so that every guess is
+/// defined), with the same samples for every predictor. `model` carries every free value;
+/// `trajectory` has its particles as markers. Throws InputError on unusable input (no frame
+/// rate, horizons < 1, no start).
 PredictionReport evaluatePredictions(const Model& model, const Trajectory& trajectory,
                                      const std::vector<int>& horizons,
                                      double rollout_factor = 10.0);
