@@ -24,24 +24,18 @@ namespace {
 using namespace mmetest;
 
 std::mutex g_stats_mutex;
-std::map<std::string, long long> g_stats;
+std::map<std::string, double> g_stats;
 std::atomic<int> g_marker_arrays{0};
 
 void onStats(const std_msgs::String::ConstPtr& msg) {
-  std::map<std::string, long long> fields;
-  std::istringstream in(msg->data);
-  std::string item;
-  while (in >> item) {
-    const size_t eq = item.find('=');
-    if (eq != std::string::npos) fields[item.substr(0, eq)] = std::stoll(item.substr(eq + 1));
-  }
+  std::map<std::string, double> fields = parseStatsLine(msg->data);
   std::lock_guard<std::mutex> lock(g_stats_mutex);
-  g_stats = fields;
+  g_stats = std::move(fields);
 }
 
 void onMarkerArray(const visualization_msgs::MarkerArray::ConstPtr&) { ++g_marker_arrays; }
 
-std::map<std::string, long long> stats() {
+std::map<std::string, double> stats() {
   std::lock_guard<std::mutex> lock(g_stats_mutex);
   return g_stats;
 }
@@ -147,7 +141,7 @@ TEST(EstimatorNode, SurvivesAndCountsBadInput) {
   const long long want_accepted = feed.sentGood() + nan_frames;
   const long long want_rejected = node_rejected + time_rejected;
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(10.0);
-  std::map<std::string, long long> s;
+  std::map<std::string, double> s;
   while (ros::ok() && ros::WallTime::now() < deadline) {
     s = stats();
     if (s["accepted"] == want_accepted && s["rejected"] == want_rejected) break;
@@ -166,8 +160,8 @@ TEST(EstimatorNode, SurvivesAndCountsBadInput) {
   ASSERT_EQ(s.count("max_update_gap_10s_ms"), 1u);
   EXPECT_GE(s["max_update_gap_ms"], s["max_update_gap_10s_ms"]);
   EXPECT_LT(s["max_update_gap_ms"], 10000);
-  std::printf("[ INFO     ] stats after the bad input: accepted=%lld rejected=%lld "
-              "rejected_time=%lld occluded=%lld\n", s["accepted"], s["rejected"],
+  std::printf("[ INFO     ] stats after the bad input: accepted=%.0f rejected=%.0f "
+              "rejected_time=%.0f occluded=%.0f\n", s["accepted"], s["rejected"],
               s["rejected_time"], s["occluded"]);
 
   // Still alive: estimates keep coming and converge to the truth from the mixed window.

@@ -11,9 +11,11 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cstdlib>
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <sstream>
 #include <string>
@@ -28,6 +30,18 @@
 #include "motion_model_estimation/scenes/scenes.h"
 
 namespace mmetest {
+
+/// The fields of a ~stats line ("key=value" separated by spaces) by key.
+inline std::map<std::string, double> parseStatsLine(const std::string& line) {
+  std::map<std::string, double> fields;
+  std::istringstream in(line);
+  std::string item;
+  while (in >> item) {
+    const size_t eq = item.find('=');
+    if (eq != std::string::npos) fields[item.substr(0, eq)] = std::atof(item.c_str() + eq + 1);
+  }
+  return fields;
+}
 
 using motion_model_estimation::MarkerFrame;
 using motion_model_estimation::ModelEstimate;

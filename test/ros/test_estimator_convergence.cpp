@@ -155,13 +155,7 @@ std::mutex g_stats_mutex;
 std::map<std::string, double> g_stats;  // the last ~stats line, field by field
 
 void onStats(const std_msgs::String::ConstPtr& msg) {
-  std::map<std::string, double> fields;
-  std::istringstream in(msg->data);
-  std::string item;
-  while (in >> item) {
-    const size_t eq = item.find('=');
-    if (eq != std::string::npos) fields[item.substr(0, eq)] = std::atof(item.c_str() + eq + 1);
-  }
+  std::map<std::string, double> fields = parseStatsLine(msg->data);
   std::lock_guard<std::mutex> lock(g_stats_mutex);
   g_stats = std::move(fields);
 }
