@@ -164,6 +164,8 @@ struct Selection {
   double rss_m2 = 0.0;
   int parameters = 0;
   std::vector<int> active_columns;
+  Eigen::MatrixXd inverse_scaled;  ///< the final solve's scaled (pseudo-)inverse
+  Eigen::VectorXd scale;           ///< its column scaling
 };
 
 std::vector<int> activeColumns(const std::vector<Group>& groups, const std::vector<int>& always) {
@@ -303,6 +305,8 @@ Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
   s.rss_m2 = rss(sys, s.theta);
   s.parameters = static_cast<int>(cols.size());
   s.active_columns = cols;
+  s.inverse_scaled = inv;
+  s.scale = scale;
   if (progress) progress("  elimination: " + std::to_string(removed) + " unit(s) removed, " +
                          std::to_string(cols.size()) + " unknowns left");
   return s;
@@ -337,9 +341,8 @@ Solved describe(const Model& candidate, const EquationErrorSystem& sys, const Se
     const bool product = sys.column_partner[j] >= 0;
     column_of[{r.bond_type, product ? -kRestLength - 1 : r.param}] = static_cast<int>(j);
   }
-  Eigen::MatrixXd inv;
-  Eigen::VectorXd scale;
-  solveActive(sys, sel.active_columns, &inv, &scale);
+  const Eigen::MatrixXd& inv = sel.inverse_scaled;  // the elimination's final solve
+  const Eigen::VectorXd& scale = sel.scale;
   std::map<int, int> position;
   for (size_t i = 0; i < sel.active_columns.size(); ++i) position[sel.active_columns[i]] = static_cast<int>(i);
   const auto cov = [&](int ci, int cj) {
