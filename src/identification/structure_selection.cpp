@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -12,6 +13,7 @@
 #include <utility>
 
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/forces.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/equation_error.h"
 #include "motion_model_estimation/identification/prediction_error.h"
@@ -21,6 +23,7 @@ namespace mme {
 namespace {
 
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+constexpr double kPi = 3.14159265358979323846;
 constexpr int kHorizons[3] = {1, 5, 10};
 constexpr int kMaxPasses = 12;  ///< solves per level (non-physical drops, screening rounds)
 
@@ -119,6 +122,106 @@ int addCandidateBonds(Model* model, const std::vector<std::pair<int, int>>& pair
     model->bonds.push_back(bond);
   }
   return first;
+}
+
+/// Near-collinear triples (a, v, c) for flexion: a and c among the `nearest` candidate partners
+/// of the vertex v, with a mean angle at v of at least `min_angle_rad` (a chain's bend: springs
+/// alone resist it only at second order, unlike a triangle's), the straightest first, at most
+/// `most`.
+std::vector<std::array<int, 3>> candidateTriples(const Model& model, const Trajectory& data,
+                                                 const std::vector<std::pair<int, int>>& pairs,
+                                                 int nearest, double min_angle_rad, int most) {
+  const int n = static_cast<int>(model.particles.size());
+  // Each vertex's nearest candidate partners (mean distance): a chain's neighbours.
+  const auto meanDistance = [&](int a, int b) {
+    double sum = 0.0;
+    int count = 0;
+    for (int t = 0; t < data.numFrames(); ++t)
+      if (!data.isOccluded(t, a) && !data.isOccluded(t, b)) {
+        sum += (data.position(t, a) - data.position(t, b)).norm();
+        ++count;
+      }
+    return count > 0 ? sum / count : std::numeric_limits<double>::infinity();
+  };
+  std::vector<std::vector<std::pair<double, int>>> by_distance(n);
+  for (const auto& p : pairs) {
+    const double d = meanDistance(p.first, p.second);
+    by_distance[p.first].push_back({d, p.second});
+    by_distance[p.second].push_back({d, p.first});
+  }
+  std::vector<std::vector<int>> partners(n);
+  for (int v = 0; v < n; ++v) {
+    std::sort(by_distance[v].begin(), by_distance[v].end());
+    for (int k = 0; k < nearest && k < static_cast<int>(by_distance[v].size()); ++k)
+      partners[v].push_back(by_distance[v][k].second);
+  }
+  std::vector<std::pair<double, std::array<int, 3>>> found;
+  for (int v = 0; v < n; ++v) {
+    if (model.particles[v].fixed) continue;
+    const std::vector<int>& near = partners[v];
+    for (size_t i = 0; i < near.size(); ++i)
+      for (size_t j = i + 1; j < near.size(); ++j) {
+        const int a = std::min(near[i], near[j]), c = std::max(near[i], near[j]);
+        double sum = 0.0;
+        int count = 0;
+        for (int t = 0; t < data.numFrames(); ++t) {
+          if (data.isOccluded(t, a) || data.isOccluded(t, v) || data.isOccluded(t, c)) continue;
+          sum += flexionAngle(data.position(t, a), data.position(t, v), data.position(t, c));
+          ++count;
+        }
+        if (count < 3 || sum / count < min_angle_rad) continue;
+        found.push_back({-sum / count, {{a, v, c}}});
+      }
+  }
+  std::sort(found.begin(), found.end());
+  if (static_cast<int>(found.size()) > most) found.resize(most);
+  std::vector<std::array<int, 3>> triples;
+  for (const auto& f : found) triples.push_back(f.second);
+  std::sort(triples.begin(), triples.end());
+  return triples;
+}
+
+/// A flexion bond of its own type per triple (stiffness, rest angle at the mean angle, and a
+/// damping when `dampers`).
+void addCandidateFlexions(Model* model, const std::vector<std::array<int, 3>>& triples,
+                          const Trajectory& data, bool dampers) {
+  for (const auto& tr : triples) {
+    BondType type;
+    type.name = "f_" + model->particles[tr[0]].name + "_" + model->particles[tr[1]].name + "_" +
+                model->particles[tr[2]].name;
+    type.kind = BondKind::kFlexion;
+    double angle = 0.0;
+    int count = 0;
+    for (int t = 0; t < data.numFrames(); ++t)
+      if (!data.isOccluded(t, tr[0]) && !data.isOccluded(t, tr[1]) && !data.isOccluded(t, tr[2])) {
+        angle += flexionAngle(data.position(t, tr[0]), data.position(t, tr[1]), data.position(t, tr[2]));
+        ++count;
+      }
+    type.param(kStiffness) = freeParam(1e-3);
+    type.param(kRestAngle) = freeParam(count > 0 ? angle / count : 3.0);
+    if (dampers) type.param(kDamping) = freeParam(1e-4);
+    Bond bond;
+    bond.type = static_cast<int>(model->bond_types.size());
+    bond.particles = {{tr[0], tr[1], tr[2]}};
+    model->bond_types.push_back(type);
+    model->bonds.push_back(bond);
+  }
+}
+
+/// A viscosity (drag on the particle's velocity) of its own type per free particle.
+void addCandidateViscosities(Model* model) {
+  for (size_t i = 0; i < model->particles.size(); ++i) {
+    if (model->particles[i].fixed) continue;
+    BondType type;
+    type.name = "v_" + model->particles[i].name;
+    type.kind = BondKind::kViscosity;
+    type.param(kViscosity) = freeParam(0.01);
+    Bond bond;
+    bond.type = static_cast<int>(model->bond_types.size());
+    bond.particles = {{static_cast<int>(i), -1, -1}};
+    model->bond_types.push_back(type);
+    model->bonds.push_back(bond);
+  }
 }
 
 /// Solves the columns in `active` of the normal equations (scaled, rank-revealing); the others 0.
@@ -320,13 +423,14 @@ double bic(double rss_m2, size_t rows, int parameters, double sigma2_floor) {
 }
 
 /// The model a selection describes: the base model's own bonds, then one type per kept bond
-/// with its solved values (k, L, c); gravity off when its unit was removed.
+/// with its solved values (spring k, L, c; flexion k, theta0, c; viscosity c_v, 0, 0); gravity
+/// off when its unit was removed.
 struct Solved {
   Model model;
   std::vector<int> kept_types;      ///< the candidate types kept (indices into the candidate model)
-  std::vector<Eigen::Vector3d> value, sigma;  ///< per kept type: (k, L, c) and their 1-sigma
+  std::vector<Eigen::Vector3d> value, sigma;  ///< per kept type: its values and their 1-sigma
   std::vector<uint8_t> damped;      ///< per kept type: it has a damper
-  std::vector<int> bad_springs;     ///< kept types with k <= 0 or L <= 0
+  std::vector<int> bad_bonds;       ///< kept types with k <= 0, L <= 0, theta0 outside (0, pi] or c_v <= 0
   std::vector<int> bad_dampers;     ///< kept types with a damping <= 0
 };
 
@@ -377,26 +481,39 @@ Solved describe(const Model& candidate, const EquationErrorSystem& sys, const Se
     if (!g.active) continue;
     const int t = g.bond_type;
     keep_type[t] = 1;
-    const int ck = column_of.at({t, kStiffness}), ckl = column_of.at({t, -kRestLength - 1});
-    const double k = sel.theta[ck], kl = sel.theta[ckl];
-    const double length = kl / k;
-    Eigen::Vector3d v(k, length, 0.0), s(0.0, 0.0, 0.0);
-    s[0] = std::sqrt(std::max(0.0, cov(ck, ck)));
-    const double dl_dkl = 1.0 / k, dl_dk = -kl / (k * k);
-    s[1] = std::sqrt(std::max(0.0, dl_dkl * dl_dkl * cov(ckl, ckl) + dl_dk * dl_dk * cov(ck, ck) +
-                                       2.0 * dl_dkl * dl_dk * cov(ck, ckl)));
-    const auto damper = column_of.find({t, kDamping});
-    const bool damped = dampers && damper != column_of.end() && position.count(damper->second);
-    if (damped) {
-      v[2] = sel.theta[damper->second];
-      s[2] = std::sqrt(std::max(0.0, cov(damper->second, damper->second)));
-    }
-    if (!(k > 0.0) || !(length > 0.0)) out.bad_springs.push_back(t);
-    else if (damped && !(v[2] > 0.0)) out.bad_dampers.push_back(t);
     BondType& type = model.bond_types[t];
-    type.param(kStiffness).value = k;
-    type.param(kRestLength).value = length;
-    if (damped) type.param(kDamping).value = v[2];
+    Eigen::Vector3d v(0.0, 0.0, 0.0), s(0.0, 0.0, 0.0);
+    bool damped = false;
+    if (type.kind == BondKind::kViscosity) {
+      const int cv = column_of.at({t, kViscosity});
+      v[0] = sel.theta[cv];
+      s[0] = std::sqrt(std::max(0.0, cov(cv, cv)));
+      if (!(v[0] > 0.0)) out.bad_bonds.push_back(t);
+      else type.param(kViscosity).value = v[0];
+    } else {
+      // A spring (k, L = kL / k, c) or a flexion (k, theta0 = k theta0 / k, c): the same algebra.
+      const bool spring = type.kind == BondKind::kSpring;
+      const int ck = column_of.at({t, kStiffness}), ckl = column_of.at({t, -kRestLength - 1});
+      const double k = sel.theta[ck], kl = sel.theta[ckl];
+      const double rest = kl / k;
+      v << k, rest, 0.0;
+      s[0] = std::sqrt(std::max(0.0, cov(ck, ck)));
+      const double dl_dkl = 1.0 / k, dl_dk = -kl / (k * k);
+      s[1] = std::sqrt(std::max(0.0, dl_dkl * dl_dkl * cov(ckl, ckl) + dl_dk * dl_dk * cov(ck, ck) +
+                                         2.0 * dl_dkl * dl_dk * cov(ck, ckl)));
+      const auto damper = column_of.find({t, kDamping});
+      damped = dampers && damper != column_of.end() && position.count(damper->second);
+      if (damped) {
+        v[2] = sel.theta[damper->second];
+        s[2] = std::sqrt(std::max(0.0, cov(damper->second, damper->second)));
+      }
+      const bool rest_ok = spring ? rest > 0.0 : (rest > 0.0 && rest <= kPi);
+      if (!(k > 0.0) || !rest_ok) out.bad_bonds.push_back(t);
+      else if (damped && !(v[2] > 0.0)) out.bad_dampers.push_back(t);
+      type.param(kStiffness).value = k;
+      type.param(spring ? kRestLength : kRestAngle).value = rest;
+      if (damped) type.param(kDamping).value = v[2];
+    }
     out.kept_types.push_back(t);
     out.value.push_back(v);
     out.sigma.push_back(s);
@@ -422,8 +539,9 @@ Solved describe(const Model& candidate, const EquationErrorSystem& sys, const Se
   return out;
 }
 
-/// Bonds whose (k, L, c) agree within `sigmas` standard deviations share a type (greedy, in
-/// order of stiffness). Returns the typed model (candidate types renamed s00, s01, ...).
+/// Bonds of one kind whose values (k, L, c; k, theta0, c; c_v) agree within `sigmas` standard
+/// deviations share a type (greedy, in order of stiffness). Returns the typed model (candidate
+/// types renamed s00, s01, ... for springs, f00, ... for flexion, v00, ... for viscosity).
 Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, int* types_out) {
   const Model& m = solved.model;
   const int kept = static_cast<int>(solved.kept_types.size());
@@ -434,6 +552,7 @@ Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, i
   struct Cluster {
     Eigen::Vector3d sum_w_v = Eigen::Vector3d::Zero(), sum_w = Eigen::Vector3d::Zero();
     uint8_t damped = 0;
+    BondKind kind = BondKind::kSpring;
     int first_member = -1;
     Eigen::Vector3d mean() const { return sum_w_v.cwiseQuotient(sum_w); }
     Eigen::Vector3d sigma() const { return sum_w.cwiseInverse().cwiseSqrt(); }
@@ -448,7 +567,9 @@ Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, i
     int join = -1;
     for (size_t c = 0; c < clusters.size() && join < 0; ++c) {
       const Eigen::Vector3d mu = clusters[c].mean(), sc = clusters[c].sigma();
-      bool agree = clusters[c].damped == solved.damped[idx];  // a damper or none, alike
+      const BondKind kind = m.bond_types[first_candidate_type + idx].kind;
+      // One kind, and a damper or none, alike.
+      bool agree = clusters[c].kind == kind && clusters[c].damped == solved.damped[idx];
       for (int d = 0; d < (solved.damped[idx] ? 3 : 2) && agree; ++d)
         agree = std::fabs(v[d] - mu[d]) <= sigmas * std::sqrt(s[d] * s[d] + sc[d] * sc[d]);
       if (agree) join = static_cast<int>(c);
@@ -457,6 +578,7 @@ Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, i
       join = static_cast<int>(clusters.size());
       clusters.emplace_back();
       clusters.back().damped = solved.damped[idx];
+      clusters.back().kind = m.bond_types[first_candidate_type + idx].kind;
       clusters.back().first_member = idx;
     }
     const Eigen::Vector3d w = s.cwiseProduct(s).cwiseInverse();
@@ -468,15 +590,34 @@ Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, i
   Model typed = m;
   typed.bond_types.resize(first_candidate_type);
   char name[32];
+  int of_kind[3] = {0, 0, 0};  // numbering per kind: s00.., f00.., v00..
   for (size_t c = 0; c < clusters.size(); ++c) {
     // The layout (which parameters are free) of the cluster's first member.
     BondType type = m.bond_types[first_candidate_type + clusters[c].first_member];
-    std::snprintf(name, sizeof(name), "s%02d", static_cast<int>(c));
-    type.name = name;
     const Eigen::Vector3d mu = clusters[c].mean();
-    type.param(kStiffness).value = mu[0];
-    type.param(kRestLength).value = mu[1];
-    if (clusters[c].damped) type.param(kDamping).value = mu[2];
+    const char* prefix = "s";
+    int* counter = &of_kind[0];
+    switch (type.kind) {
+      case BondKind::kSpring:
+        type.param(kStiffness).value = mu[0];
+        type.param(kRestLength).value = mu[1];
+        if (clusters[c].damped) type.param(kDamping).value = mu[2];
+        break;
+      case BondKind::kFlexion:
+        prefix = "f";
+        counter = &of_kind[1];
+        type.param(kStiffness).value = mu[0];
+        type.param(kRestAngle).value = mu[1];
+        if (clusters[c].damped) type.param(kDamping).value = mu[2];
+        break;
+      case BondKind::kViscosity:
+        prefix = "v";
+        counter = &of_kind[2];
+        type.param(kViscosity).value = mu[0];
+        break;
+    }
+    std::snprintf(name, sizeof(name), "%s%02d", prefix, (*counter)++);
+    type.name = name;
     typed.bond_types.push_back(type);
   }
   // The kept candidate types of `m` follow the base types in kept order.
@@ -485,6 +626,26 @@ Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, i
       b.type = first_candidate_type + cluster_of[b.type - first_candidate_type];
   *types_out = static_cast<int>(clusters.size());
   return typed;
+}
+
+/// What a level kept, before typing: per candidate bond its kind, particles and which of its
+/// parameters are present (equal strings: the same structure).
+std::string structureSignature(const Model& model, int first_candidate_type) {
+  std::vector<std::string> items;
+  for (const Bond& b : model.bonds) {
+    if (b.type < first_candidate_type) continue;
+    const BondType& type = model.bond_types[b.type];
+    std::string item = kindName(type.kind);
+    for (int k = 0; k < kindArity(type.kind); ++k) item += " " + model.particles[b.particles[k]].name;
+    for (ParamId id : paramsOfKind(type.kind))
+      if (type.param(id).present) item += std::string(" ") + paramKey(id);
+    items.push_back(item);
+  }
+  std::sort(items.begin(), items.end());
+  std::string out;
+  for (const std::string& item : items) out += item + ";";
+  const bool gravity = model.gravity_mps2[0].free || model.gravity_mps2[1].free || model.gravity_mps2[2].free;
+  return out + (gravity ? "gravity" : "");
 }
 
 void heldOutErrors(const Model& model, const Trajectory& held, StructureCandidate* c) {
@@ -640,13 +801,36 @@ StructureResult selectStructure(const Model& model, const Trajectory& data,
   }
 
   const int first_candidate_type = static_cast<int>(model.bond_types.size());
+  // Flexion candidates on near-collinear triples of the candidate pairs.
+  std::vector<std::array<int, 3>> triples;
+  if (options.try_flexion)
+    triples = candidateTriples(model, fit, pairs, 4, options.flexion_min_angle_rad,
+                               4 * static_cast<int>(model.particles.size()));
+  // The levels, in rising complexity; each holds every candidate component of the ones before.
+  struct Level {
+    std::string name;
+    bool dampers, flexion, viscosity;
+  };
+  std::vector<Level> levels = {{"springs", false, false, false}};
+  if (options.try_dampers) levels.push_back({"springs+dampers", true, false, false});
+  if (!triples.empty()) levels.push_back({levels.back().name + "+flexion", options.try_dampers, true, false});
+  if (options.try_viscosity)
+    levels.push_back({levels.back().name + "+viscosity", options.try_dampers, !triples.empty(), true});
+  say("structure: " + std::to_string(triples.size()) + " flexion candidate(s) on near-collinear triples; " +
+      std::to_string(levels.size()) + " level(s) to try");
   std::vector<StructureCandidate> candidates;
-  for (int level = 0; level < (options.try_dampers ? 2 : 1); ++level) {
-    const bool dampers = level == 1;
+  std::vector<std::string> signatures;  // per level: the kept structure before typing
+  for (const Level& level : levels) {
+    const bool dampers = level.dampers;
     StructureCandidate cand;
-    cand.name = dampers ? "springs+dampers" : "springs";
+    cand.name = level.name;
     Model full = model;
-    addCandidateBonds(&full, pairs, fit, dampers);
+    // Pairs the screening of an earlier level found start as candidates here.
+    addCandidateBonds(&full, std::vector<std::pair<int, int>>(all_candidates.begin(), all_candidates.end()),
+                      fit, dampers);
+    if (level.flexion) addCandidateFlexions(&full, triples, fit, dampers);
+    if (level.viscosity) addCandidateViscosities(&full);
+    std::string signature;
     std::vector<Group> groups;
     int screening_rounds = 0;
     for (int pass = 0; pass < kMaxPasses; ++pass) {
@@ -729,28 +913,25 @@ StructureResult selectStructure(const Model& model, const Trajectory& data,
           continue;
         }
       }
-      if ((!solved.bad_springs.empty() || !solved.bad_dampers.empty()) && pass + 1 < kMaxPasses) {
+      if ((!solved.bad_bonds.empty() || !solved.bad_dampers.empty()) && pass + 1 < kMaxPasses) {
         // Kept bonds that came out non-physical lose their spring (the bond goes) or their
         // damper; then the system is solved again. A type without a bond keeps no free value.
-        std::set<int> bad(solved.bad_springs.begin(), solved.bad_springs.end());
+        std::set<int> bad(solved.bad_bonds.begin(), solved.bad_bonds.end());
         std::vector<Bond> bonds;
         for (const Bond& b : full.bonds)
           if (!bad.count(b.type)) bonds.push_back(b);
         full.bonds = bonds;
-        for (int t : solved.bad_springs) {
+        for (int t : solved.bad_bonds) {
           BondType& type = full.bond_types[t];
-          type.param(kStiffness).free = false;
-          type.param(kStiffness).value = 0.0;
-          type.param(kRestLength).free = false;
-          type.param(kDamping) = Param();
+          for (ParamId id : paramsOfKind(type.kind)) type.param(id) = Param();
         }
         for (int t : solved.bad_dampers) full.bond_types[t].param(kDamping) = Param();
-        say("structure: " + cand.name + ": " + std::to_string(solved.bad_springs.size()) +
-            " non-physical spring(s) and " + std::to_string(solved.bad_dampers.size()) +
+        say("structure: " + cand.name + ": " + std::to_string(solved.bad_bonds.size()) +
+            " non-physical bond(s) and " + std::to_string(solved.bad_dampers.size()) +
             " damper(s) dropped; solving again");
         continue;
       }
-      if (!solved.bad_springs.empty() || !solved.bad_dampers.empty())
+      if (!solved.bad_bonds.empty() || !solved.bad_dampers.empty())
         result.notes.push_back(cand.name + ": non-physical values remained after " +
                                std::to_string(kMaxPasses) + " passes");
       // Types: one per bond, or shared where the values agree; the criterion decides.
@@ -794,7 +975,22 @@ StructureResult selectStructure(const Model& model, const Trajectory& data,
       cand.parameters = params;
       cand.fit_rms_m = std::sqrt(fit_rss / std::max<size_t>(sys.rows, 1));
       cand.bic = chosen_bic;
+      signature = structureSignature(solved.model, first_candidate_type);
       break;
+    }
+    // A level that kept none of its new components has an earlier level's structure: not
+    // refitted nor judged again (its figures are that level's).
+    const size_t same = std::find(signatures.begin(), signatures.end(), signature) - signatures.begin();
+    signatures.push_back(signature);
+    if (same + 1 < signatures.size()) {
+      const StructureCandidate& earlier = candidates[same];
+      const std::string name = cand.name;
+      cand = earlier;
+      cand.name = name;
+      cand.same_as = earlier.same_as.empty() ? earlier.name : earlier.same_as;
+      say("structure: " + name + ": none of its new components kept; the structure of " + cand.same_as);
+      candidates.push_back(std::move(cand));
+      continue;
     }
     if (options.refit) {
       IdentifyOptions io = options.identify;
@@ -840,39 +1036,59 @@ StructureResult selectStructure(const Model& model, const Trajectory& data,
 }
 
 StructureScore scoreStructure(const Model& truth, const Model& chosen) {
+  // Bonds by their particles' names: a pair sorted, a flexion as (vertex, sorted ends).
   const auto key = [](const Model& m, const Bond& b) {
-    std::string a = m.particles[b.particles[0]].name, c = m.particles[b.particles[1]].name;
+    const BondType& type = m.bond_types[b.type];
+    std::string a = m.particles[b.particles[0]].name;
+    std::string c = kindArity(type.kind) >= 2 ? m.particles[b.particles[kindArity(type.kind) - 1]].name : "";
     if (c < a) std::swap(a, c);
-    return std::make_pair(a, c);
+    const std::string v = kindArity(type.kind) == 3 ? m.particles[b.particles[1]].name : "";
+    return std::string(kindName(type.kind)) + "|" + v + "|" + a + "|" + c;
   };
-  std::map<std::pair<std::string, std::string>, const BondType*> want, got;
-  for (const Bond& b : truth.bonds)
-    if (kindArity(truth.bond_types[b.type].kind) == 2) want[key(truth, b)] = &truth.bond_types[b.type];
-  for (const Bond& b : chosen.bonds)
-    if (kindArity(chosen.bond_types[b.type].kind) == 2) got[key(chosen, b)] = &chosen.bond_types[b.type];
+  std::map<std::string, const BondType*> want[2], got[2];  // [0] pairs, [1] flexions
   StructureScore s;
-  int hit = 0;
-  for (const auto& g : got) hit += want.count(g.first) ? 1 : 0;
-  s.precision = got.empty() ? 0.0 : static_cast<double>(hit) / got.size();
-  s.recall = want.empty() ? 0.0 : static_cast<double>(hit) / want.size();
-  s.f1 = s.precision + s.recall > 0.0 ? 2.0 * s.precision * s.recall / (s.precision + s.recall) : 0.0;
+  for (const Bond& b : truth.bonds) {
+    const BondKind kind = truth.bond_types[b.type].kind;
+    if (kind == BondKind::kSpring || kind == BondKind::kFlexion)
+      want[kind == BondKind::kFlexion ? 1 : 0][key(truth, b)] = &truth.bond_types[b.type];
+  }
+  for (const Bond& b : chosen.bonds) {
+    const BondKind kind = chosen.bond_types[b.type].kind;
+    if (kind == BondKind::kSpring || kind == BondKind::kFlexion)
+      got[kind == BondKind::kFlexion ? 1 : 0][key(chosen, b)] = &chosen.bond_types[b.type];
+    if (kind == BondKind::kViscosity) ++s.viscosity_bonds;
+  }
+  double* precision[2] = {&s.precision, &s.flexion_precision};
+  double* recall[2] = {&s.recall, &s.flexion_recall};
+  double* f1[2] = {&s.f1, &s.flexion_f1};
+  for (int k = 0; k < 2; ++k) {
+    if (k == 1 && want[k].empty() && got[k].empty()) continue;  // no flexion anywhere: 1
+    int hit = 0;
+    for (const auto& g : got[k]) hit += want[k].count(g.first) ? 1 : 0;
+    *precision[k] = got[k].empty() ? 0.0 : static_cast<double>(hit) / got[k].size();
+    *recall[k] = want[k].empty() ? 0.0 : static_cast<double>(hit) / want[k].size();
+    *f1[k] = *precision[k] + *recall[k] > 0.0
+                 ? 2.0 * *precision[k] * *recall[k] / (*precision[k] + *recall[k]) : 0.0;
+  }
   s.types = static_cast<int>(chosen.bond_types.size());
   s.damped_everywhere = s.damped_nowhere = true;
   for (const BondType& t : chosen.bond_types) {
+    if (t.kind == BondKind::kViscosity) continue;
     const bool damped = t.value(kDamping) != 0.0;
     s.damped_everywhere = s.damped_everywhere && damped;
     s.damped_nowhere = s.damped_nowhere && !damped;
   }
-  for (const auto& w : want) {
-    const auto g = got.find(w.first);
-    if (g == got.end()) continue;
-    for (ParamId id : {kStiffness, kRestLength, kDamping}) {
-      const double truth_value = w.second->value(id);
-      if (truth_value == 0.0) continue;
-      s.max_relative_error = std::max(
-          s.max_relative_error, std::fabs(g->second->value(id) - truth_value) / std::fabs(truth_value));
+  for (int k = 0; k < 2; ++k)
+    for (const auto& w : want[k]) {
+      const auto g = got[k].find(w.first);
+      if (g == got[k].end()) continue;
+      for (ParamId id : {kStiffness, k == 1 ? kRestAngle : kRestLength, kDamping}) {
+        const double truth_value = w.second->value(id);
+        if (truth_value == 0.0) continue;
+        s.max_relative_error = std::max(
+            s.max_relative_error, std::fabs(g->second->value(id) - truth_value) / std::fabs(truth_value));
+      }
     }
-  }
   return s;
 }
 
@@ -883,22 +1099,23 @@ std::string formatStructureReport(const StructureResult& r) {
                 "structure selection: %d candidate bonds; %d frames fitted, %d held out\n",
                 r.candidate_bonds, r.fitted_frames, r.held_out_frames);
   out << line;
-  std::snprintf(line, sizeof(line), "%-18s %6s %6s %6s %12s %12s %12s %10s %10s %10s %8s %s\n",
+  std::snprintf(line, sizeof(line), "%-34s %6s %6s %6s %12s %12s %12s %10s %10s %10s %8s %s\n",
                 "candidate", "bonds", "types", "params", "fit_rms_m", "bic", "refit_m2",
                 "held1_mm", "held5_mm", "held10_mm", "bounded", "");
   out << line;
   for (const StructureCandidate& c : r.candidates) {
     std::snprintf(line, sizeof(line),
-                  "%-18s %6d %6d %6d %12.4g %12.6g %12.4g %10.4g %10.4g %10.4g %8s %s\n",
+                  "%-34s %6d %6d %6d %12.4g %12.6g %12.4g %10.4g %10.4g %10.4g %8s %s%s\n",
                   c.name.c_str(), c.bonds, c.bond_types, c.parameters, c.fit_rms_m, c.bic,
                   c.refit_cost_m2, 1e3 * c.held_out_rms_m[0], 1e3 * c.held_out_rms_m[1],
                   1e3 * c.held_out_rms_m[2], c.rollout_bounded ? "yes" : "no",
-                  c.chosen ? "<- chosen" : "");
+                  c.chosen ? "<- chosen" : "",
+                  c.same_as.empty() ? "" : ("(= " + c.same_as + ")").c_str());
     out << line;
   }
   const char* guesses[3] = {"constant_velocity", "constant_acceleration", "gravity_only"};
   for (int g = 0; g < 3; ++g) {
-    std::snprintf(line, sizeof(line), "%-18s %6s %6s %6s %12s %12s %12s %10.4g %10.4g %10.4g\n",
+    std::snprintf(line, sizeof(line), "%-34s %6s %6s %6s %12s %12s %12s %10.4g %10.4g %10.4g\n",
                   guesses[g], "-", "-", "0", "-", "-", "-", 1e3 * r.guess_rms_m[g][0],
                   1e3 * r.guess_rms_m[g][1], 1e3 * r.guess_rms_m[g][2]);
     out << line;
@@ -910,18 +1127,18 @@ std::string formatStructureReport(const StructureResult& r) {
 std::string structureReportCsv(const StructureResult& r) {
   std::ostringstream out;
   out << "name,bonds,bond_types,parameters,fit_rms_m,bic,refit_cost_m2,held_out_rms_1_m,"
-         "held_out_rms_5_m,held_out_rms_10_m,rollout_bounded,chosen\n";
+         "held_out_rms_5_m,held_out_rms_10_m,rollout_bounded,chosen,same_as\n";
   char line[400];
   for (const StructureCandidate& c : r.candidates) {
-    std::snprintf(line, sizeof(line), "%s,%d,%d,%d,%.6g,%.9g,%.6g,%.6g,%.6g,%.6g,%d,%d\n",
+    std::snprintf(line, sizeof(line), "%s,%d,%d,%d,%.6g,%.9g,%.6g,%.6g,%.6g,%.6g,%d,%d,%s\n",
                   c.name.c_str(), c.bonds, c.bond_types, c.parameters, c.fit_rms_m, c.bic,
                   c.refit_cost_m2, c.held_out_rms_m[0], c.held_out_rms_m[1], c.held_out_rms_m[2],
-                  c.rollout_bounded ? 1 : 0, c.chosen ? 1 : 0);
+                  c.rollout_bounded ? 1 : 0, c.chosen ? 1 : 0, c.same_as.c_str());
     out << line;
   }
   const char* guesses[3] = {"constant_velocity", "constant_acceleration", "gravity_only"};
   for (int g = 0; g < 3; ++g) {
-    std::snprintf(line, sizeof(line), "%s,,,0,,,,%.6g,%.6g,%.6g,,0\n", guesses[g],
+    std::snprintf(line, sizeof(line), "%s,,,0,,,,%.6g,%.6g,%.6g,,0,\n", guesses[g],
                   r.guess_rms_m[g][0], r.guess_rms_m[g][1], r.guess_rms_m[g][2]);
     out << line;
   }

@@ -43,4 +43,26 @@ struct HangingObjectSpec {
 /// Throws InputError on an impossible spec.
 Model makeHangingObject(const HangingObjectSpec& spec);
 
+struct ChainObjectSpec {
+  int chains = 3;              ///< chains hanging off a hub triangle of their roots (>= 3)
+  int links = 5;               ///< particles per chain, root included (>= 3: one flexion at least)
+  int spring_types = 2;        ///< segment spring types (chains round-robin)
+  int flexion_types = 2;       ///< flexion types at the chains' inner particles (round-robin)
+  double frame_rate_hz = 120.0;
+  double segment_m = 0.06;     ///< segment length [m]
+  /// > 0: every type also has a free damping (springs up to this [N s/m], flexion up to this
+  /// times the segment length squared [N m s/rad]).
+  double damping_max_nspm = 0.0;
+  uint64_t seed = 1;
+};
+
+/// A floating object of bent chains (no gravity, no fixed particle): the roots form an
+/// equilateral triangle of one spring type ("hub"); each chain is a line of springs whose inner
+/// particles carry a flexion bond (vertex at the particle, its neighbours on the chain) at the
+/// type's rest angle (150-172 deg: near-collinear). The chains start at their rest shape with
+/// random velocities and spring rest lengths 0.9-1.1 of the segment, so they vibrate and bend.
+/// Free parameters carry their true values, bounds as makeRandomObject. Throws InputError on an
+/// impossible spec.
+Model makeChainObject(const ChainObjectSpec& spec);
+
 }  // namespace mme
