@@ -743,8 +743,13 @@ std::vector<std::pair<int, int>> missingPairs(const Model& model, const Trajecto
 
 }  // namespace
 
-StructureResult selectStructure(const Model& model, const Trajectory& data,
+StructureResult selectStructure(const Model& given, const Trajectory& data,
                                 const StructureOptions& options) {
+  // The data's rate when the model states none (a live window, a model of particles alone).
+  Model model = given;
+  if (!(model.frame_rate_hz > 0.0)) model.frame_rate_hz = data.frame_rate_hz;
+  if (!(model.frame_rate_hz > 0.0))
+    throw InputError("structure selection: no frame rate (neither the model nor the data state one)");
   const auto say = [&](const std::string& line) {
     if (options.progress) options.progress(line);
   };
@@ -1030,6 +1035,7 @@ StructureResult selectStructure(const Model& model, const Trajectory& data,
       chosen = static_cast<int>(i);
   }
   candidates[chosen].chosen = true;
+  for (StructureCandidate& c : candidates) c.model.frame_rate_hz = given.frame_rate_hz;
   result.model = candidates[chosen].model;
   result.candidates = std::move(candidates);
   return result;
