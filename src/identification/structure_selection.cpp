@@ -230,14 +230,20 @@ Eigen::VectorXd solveActive(const EquationErrorSystem& sys, const std::vector<in
   const int m = static_cast<int>(active.size());
   Eigen::MatrixXd a(m, m);
   Eigen::VectorXd b(m), scale(m);
+  // Columns next to nothing (1e-30 of the largest) count as absent: their scaling would
+  // overflow the products below.
+  double largest = 0.0;
+  for (int i = 0; i < m; ++i) largest = std::max(largest, sys.ata(active[i], active[i]));
   for (int i = 0; i < m; ++i) {
     const double d = sys.ata(active[i], active[i]);
-    scale[i] = d > 0.0 ? 1.0 / std::sqrt(d) : 0.0;
+    scale[i] = d > 1e-30 * largest ? 1.0 / std::sqrt(d) : 0.0;
   }
   for (int i = 0; i < m; ++i) {
     b[i] = scale[i] * sys.atb[active[i]];
     for (int j = 0; j < m; ++j) a(i, j) = scale[i] * sys.ata(active[i], active[j]) * scale[j];
   }
+  if (!a.allFinite() || !b.allFinite())
+    throw InputError("structure selection: the equation error's normal equations are not finite");
   Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(a);
   cod.setThreshold(1e-12);
   Eigen::VectorXd theta = scale.asDiagonal() * cod.solve(b);
@@ -252,12 +258,13 @@ double rss(const EquationErrorSystem& sys, const Eigen::VectorXd& theta) {
   return std::max(0.0, sys.btb - 2.0 * theta.dot(sys.atb) + theta.dot(sys.ata * theta));
 }
 
-/// A removable unit: a bond's spring (with its damper), a bond's damper alone, or gravity.
+/// A removable unit: a bond (its spring, flexion or drag, with its children), one of a bond's
+/// optional terms alone (damping, cubic stiffness, quadratic damping), or gravity.
 struct Group {
   std::vector<int> columns;
   int bond_type = -1;     ///< -1: gravity
-  bool damper = false;
-  int child = -1;         ///< the damper group that must go with this spring
+  int term = -1;          ///< an optional term's ParamId (kDamping, ...); -1: the bond itself
+  std::vector<int> children;  ///< the optional terms' groups, which go with the bond
   bool active = true;
 };
 
@@ -307,9 +314,9 @@ Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
   const auto unitOf = [&](int g) {
     std::vector<int> unit;
     for (int c : groups[g].columns) unit.push_back(position.at(c));
-    const int child = groups[g].child;
-    if (child >= 0 && groups[child].active)
-      for (int c : groups[child].columns) unit.push_back(position.at(c));
+    for (int child : groups[g].children)
+      if (groups[child].active)
+        for (int c : groups[child].columns) unit.push_back(position.at(c));
     return unit;
   };
   // The residual's rise when the columns at `r` go: theta_R^T inv_RR^-1 theta_R.
@@ -395,7 +402,7 @@ Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
     }
     for (int g : batch) {
       groups[g].active = false;
-      if (groups[g].child >= 0) groups[groups[g].child].active = false;
+      for (int child : groups[g].children) groups[child].active = false;
     }
     drop(r);
     removed += static_cast<int>(batch.size());
@@ -422,16 +429,22 @@ double bic(double rss_m2, size_t rows, int parameters, double sigma2_floor) {
   return n * std::log(r / n) + parameters * std::log(n);
 }
 
+/// A kept bond's values: spring (k, L, c, k_nl, c_nl); flexion (k, theta0, c, 0, 0); viscosity
+/// (c_v, 0, 0, 0, 0).
+using BondValues = Eigen::Matrix<double, 5, 1>;
+/// Which optional terms a kept bond has (bits): damping, cubic stiffness, quadratic damping.
+enum TermBits : uint8_t { kHasDamping = 1, kHasStiffnessNl = 2, kHasDampingNl = 4 };
+
 /// The model a selection describes: the base model's own bonds, then one type per kept bond
-/// with its solved values (spring k, L, c; flexion k, theta0, c; viscosity c_v, 0, 0); gravity
-/// off when its unit was removed.
+/// with its solved values; gravity off when its unit was removed.
 struct Solved {
   Model model;
   std::vector<int> kept_types;      ///< the candidate types kept (indices into the candidate model)
-  std::vector<Eigen::Vector3d> value, sigma;  ///< per kept type: its values and their 1-sigma
-  std::vector<uint8_t> damped;      ///< per kept type: it has a damper
+  std::vector<BondValues> value, sigma;  ///< per kept type: its values and their 1-sigma
+  std::vector<uint8_t> terms;       ///< per kept type: its optional terms (TermBits)
   std::vector<int> bad_bonds;       ///< kept types with k <= 0, L <= 0, theta0 outside (0, pi] or c_v <= 0
-  std::vector<int> bad_dampers;     ///< kept types with a damping <= 0
+  /// Optional terms that came out non-physical (a damping <= 0): (type, ParamId).
+  std::vector<std::pair<int, int>> bad_terms;
 };
 
 Solved describe(const Model& candidate, const EquationErrorSystem& sys, const Selection& sel,
@@ -457,7 +470,7 @@ Solved describe(const Model& candidate, const EquationErrorSystem& sys, const Se
   // Every solved value (base types, candidates, gravity) into the model.
   for (int j : sel.active_columns) {
     const int partner = sys.column_partner[j];
-    const double value = partner >= 0 ? sel.theta[j] / sel.theta[partner] : sel.theta[j];
+    const double value = partner >= 0 ? sel.theta[j] / sel.theta[partner] : sel.theta[j] + sys.column_offset[j];
     if (std::isfinite(value)) setParam(model, refs[sys.column_param[j]], value);
   }
   // Base types stay; a candidate type stays when its spring does.
@@ -474,16 +487,16 @@ Solved describe(const Model& candidate, const EquationErrorSystem& sys, const Se
         }
       continue;
     }
-    if (g.damper) {
-      if (!g.active) model.bond_types[g.bond_type].param(kDamping) = Param();
+    if (g.term >= 0) {
+      if (!g.active) model.bond_types[g.bond_type].param(static_cast<ParamId>(g.term)) = Param();
       continue;
     }
     if (!g.active) continue;
     const int t = g.bond_type;
     keep_type[t] = 1;
     BondType& type = model.bond_types[t];
-    Eigen::Vector3d v(0.0, 0.0, 0.0), s(0.0, 0.0, 0.0);
-    bool damped = false;
+    BondValues v = BondValues::Zero(), s = BondValues::Zero();
+    uint8_t terms = 0;
     if (type.kind == BondKind::kViscosity) {
       const int cv = column_of.at({t, kViscosity});
       v[0] = sel.theta[cv];
@@ -491,33 +504,49 @@ Solved describe(const Model& candidate, const EquationErrorSystem& sys, const Se
       if (!(v[0] > 0.0)) out.bad_bonds.push_back(t);
       else type.param(kViscosity).value = v[0];
     } else {
-      // A spring (k, L = kL / k, c) or a flexion (k, theta0 = k theta0 / k, c): the same algebra.
+      // A spring (k, L = kL / k, c) or a flexion (k, theta0 = k theta0 / k, c): the same algebra;
+      // a rest length that is not free (the non-linear level) is known.
       const bool spring = type.kind == BondKind::kSpring;
-      const int ck = column_of.at({t, kStiffness}), ckl = column_of.at({t, -kRestLength - 1});
-      const double k = sel.theta[ck], kl = sel.theta[ckl];
-      const double rest = kl / k;
-      v << k, rest, 0.0;
+      const ParamId rest_id = spring ? kRestLength : kRestAngle;
+      const int ck = column_of.at({t, kStiffness});
+      const double k = sel.theta[ck];
       s[0] = std::sqrt(std::max(0.0, cov(ck, ck)));
-      const double dl_dkl = 1.0 / k, dl_dk = -kl / (k * k);
-      s[1] = std::sqrt(std::max(0.0, dl_dkl * dl_dkl * cov(ckl, ckl) + dl_dk * dl_dk * cov(ck, ck) +
-                                         2.0 * dl_dkl * dl_dk * cov(ck, ckl)));
-      const auto damper = column_of.find({t, kDamping});
-      damped = dampers && damper != column_of.end() && position.count(damper->second);
-      if (damped) {
-        v[2] = sel.theta[damper->second];
-        s[2] = std::sqrt(std::max(0.0, cov(damper->second, damper->second)));
+      double rest = type.param(rest_id).value;  // known, or set above (a linearised column)
+      const auto linearized = column_of.find({t, rest_id});
+      if (linearized != column_of.end() && position.count(linearized->second))
+        s[1] = std::sqrt(std::max(0.0, cov(linearized->second, linearized->second)));
+      const auto product = column_of.find({t, -kRestLength - 1});
+      if (product != column_of.end()) {
+        const int ckl = product->second;
+        const double kl = sel.theta[ckl];
+        rest = kl / k;
+        const double dl_dkl = 1.0 / k, dl_dk = -kl / (k * k);
+        s[1] = std::sqrt(std::max(0.0, dl_dkl * dl_dkl * cov(ckl, ckl) + dl_dk * dl_dk * cov(ck, ck) +
+                                           2.0 * dl_dkl * dl_dk * cov(ck, ckl)));
+      }
+      v[0] = k;
+      v[1] = rest;
+      // The optional terms still active.
+      const ParamId optional[3] = {kDamping, kStiffnessNl, kDampingNl};
+      for (int o = 0; o < 3; ++o) {
+        const auto column = column_of.find({t, optional[o]});
+        if (column == column_of.end() || !position.count(column->second)) continue;
+        if (optional[o] == kDamping && !dampers) continue;
+        terms |= static_cast<uint8_t>(1u << o);
+        v[2 + o] = sel.theta[column->second];
+        s[2 + o] = std::sqrt(std::max(0.0, cov(column->second, column->second)));
+        type.param(optional[o]).value = v[2 + o];
+        if (optional[o] != kStiffnessNl && !(v[2 + o] > 0.0)) out.bad_terms.push_back({t, optional[o]});
       }
       const bool rest_ok = spring ? rest > 0.0 : (rest > 0.0 && rest <= kPi);
       if (!(k > 0.0) || !rest_ok) out.bad_bonds.push_back(t);
-      else if (damped && !(v[2] > 0.0)) out.bad_dampers.push_back(t);
       type.param(kStiffness).value = k;
-      type.param(spring ? kRestLength : kRestAngle).value = rest;
-      if (damped) type.param(kDamping).value = v[2];
+      type.param(rest_id).value = rest;
     }
     out.kept_types.push_back(t);
     out.value.push_back(v);
     out.sigma.push_back(s);
-    out.damped.push_back(damped ? 1 : 0);
+    out.terms.push_back(terms);
   }
   // Drop the removed candidate types and their bonds (base types stay, indices kept in order).
   Model pruned = model;
@@ -550,38 +579,40 @@ Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, i
   std::sort(order.begin(), order.end(),
             [&](int a, int b) { return solved.value[a][0] < solved.value[b][0]; });
   struct Cluster {
-    Eigen::Vector3d sum_w_v = Eigen::Vector3d::Zero(), sum_w = Eigen::Vector3d::Zero();
-    uint8_t damped = 0;
+    BondValues sum_w_v = BondValues::Zero(), sum_w = BondValues::Zero();
+    uint8_t terms = 0;
     BondKind kind = BondKind::kSpring;
     int first_member = -1;
-    Eigen::Vector3d mean() const { return sum_w_v.cwiseQuotient(sum_w); }
-    Eigen::Vector3d sigma() const { return sum_w.cwiseInverse().cwiseSqrt(); }
+    BondValues mean() const { return sum_w_v.cwiseQuotient(sum_w); }
+    BondValues sigma() const { return sum_w.cwiseInverse().cwiseSqrt(); }
   };
   std::vector<Cluster> clusters;
   std::vector<int> cluster_of(kept, -1);
   for (int idx : order) {
-    const Eigen::Vector3d& v = solved.value[idx];
-    Eigen::Vector3d s = solved.sigma[idx];
+    const BondValues& v = solved.value[idx];
+    BondValues s = solved.sigma[idx];
     // Round-off of the solve: values within 1e-6 (relative) are equal.
-    for (int d = 0; d < 3; ++d) s[d] = std::max(s[d], 1e-6 * std::max(std::fabs(v[d]), 1e-12));
+    for (int d = 0; d < 5; ++d) s[d] = std::max(s[d], 1e-6 * std::max(std::fabs(v[d]), 1e-12));
     int join = -1;
     for (size_t c = 0; c < clusters.size() && join < 0; ++c) {
-      const Eigen::Vector3d mu = clusters[c].mean(), sc = clusters[c].sigma();
+      const BondValues mu = clusters[c].mean(), sc = clusters[c].sigma();
       const BondKind kind = m.bond_types[first_candidate_type + idx].kind;
-      // One kind, and a damper or none, alike.
-      bool agree = clusters[c].kind == kind && clusters[c].damped == solved.damped[idx];
-      for (int d = 0; d < (solved.damped[idx] ? 3 : 2) && agree; ++d)
-        agree = std::fabs(v[d] - mu[d]) <= sigmas * std::sqrt(s[d] * s[d] + sc[d] * sc[d]);
+      // One kind with the same optional terms; the values present agree.
+      const uint8_t terms = solved.terms[idx];
+      bool agree = clusters[c].kind == kind && clusters[c].terms == terms;
+      for (int d = 0; d < 5 && agree; ++d)
+        if (d < 2 || (terms & (1u << (d - 2))))
+          agree = std::fabs(v[d] - mu[d]) <= sigmas * std::sqrt(s[d] * s[d] + sc[d] * sc[d]);
       if (agree) join = static_cast<int>(c);
     }
     if (join < 0) {
       join = static_cast<int>(clusters.size());
       clusters.emplace_back();
-      clusters.back().damped = solved.damped[idx];
+      clusters.back().terms = solved.terms[idx];
       clusters.back().kind = m.bond_types[first_candidate_type + idx].kind;
       clusters.back().first_member = idx;
     }
-    const Eigen::Vector3d w = s.cwiseProduct(s).cwiseInverse();
+    const BondValues w = s.cwiseProduct(s).cwiseInverse();
     clusters[join].sum_w_v += w.cwiseProduct(v);
     clusters[join].sum_w += w;
     cluster_of[idx] = join;
@@ -594,22 +625,24 @@ Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, i
   for (size_t c = 0; c < clusters.size(); ++c) {
     // The layout (which parameters are free) of the cluster's first member.
     BondType type = m.bond_types[first_candidate_type + clusters[c].first_member];
-    const Eigen::Vector3d mu = clusters[c].mean();
+    const BondValues mu = clusters[c].mean();
     const char* prefix = "s";
     int* counter = &of_kind[0];
     switch (type.kind) {
       case BondKind::kSpring:
+      case BondKind::kFlexion: {
+        const bool spring = type.kind == BondKind::kSpring;
+        if (!spring) {
+          prefix = "f";
+          counter = &of_kind[1];
+        }
         type.param(kStiffness).value = mu[0];
-        type.param(kRestLength).value = mu[1];
-        if (clusters[c].damped) type.param(kDamping).value = mu[2];
+        type.param(spring ? kRestLength : kRestAngle).value = mu[1];
+        const ParamId optional[3] = {kDamping, kStiffnessNl, kDampingNl};
+        for (int o = 0; o < 3; ++o)
+          if (clusters[c].terms & (1u << o)) type.param(optional[o]).value = mu[2 + o];
         break;
-      case BondKind::kFlexion:
-        prefix = "f";
-        counter = &of_kind[1];
-        type.param(kStiffness).value = mu[0];
-        type.param(kRestAngle).value = mu[1];
-        if (clusters[c].damped) type.param(kDamping).value = mu[2];
-        break;
+      }
       case BondKind::kViscosity:
         prefix = "v";
         counter = &of_kind[2];
@@ -743,6 +776,84 @@ std::vector<std::pair<int, int>> missingPairs(const Model& model, const Trajecto
 
 }  // namespace
 
+/// The held-out 10-frame error decides; within 2 % of the best, the criterion (then fewer
+/// parameters) does.
+int bestCandidate(const std::vector<StructureCandidate>& candidates) {
+  double best_err = std::numeric_limits<double>::infinity();
+  for (const StructureCandidate& c : candidates)
+    if (std::isfinite(c.held_out_rms_m[2])) best_err = std::min(best_err, c.held_out_rms_m[2]);
+  int chosen = -1;
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    const StructureCandidate& c = candidates[i];
+    const bool near = !std::isfinite(best_err) || (std::isfinite(c.held_out_rms_m[2]) &&
+                                                   c.held_out_rms_m[2] <= 1.02 * best_err);
+    if (!near) continue;
+    if (chosen < 0 || c.parameters < candidates[chosen].parameters ||
+        (c.parameters == candidates[chosen].parameters && c.bic < candidates[chosen].bic))
+      chosen = static_cast<int>(i);
+  }
+  return chosen;
+}
+
+/// The non-linear level's candidate model: `linear` (the best linear level's kept bonds, one type
+/// each) with the values of its least-squares equation-error fit, and a free cubic stiffness on
+/// every candidate spring (a quadratic damping too where it has a damper), at 0.
+Model nonlinearCandidates(Model linear, const Trajectory& fit, const EquationErrorOptions& ee,
+                          int first_candidate_type) {
+  const EquationErrorResult start = solveEquationError(linear, fit, ee);
+  const std::vector<ParamRef> refs = freeParameters(linear);
+  if (start.applicable)
+    for (size_t k = 0; k < refs.size(); ++k)
+      if (std::isfinite(start.values[k])) setParam(linear, refs[k], start.values[k]);
+  for (size_t t = first_candidate_type; t < linear.bond_types.size(); ++t) {
+    BondType& type = linear.bond_types[t];
+    if (type.kind != BondKind::kSpring || !type.param(kStiffness).free) continue;
+    type.param(kStiffnessNl) = freeParam(0.0);
+    if (type.param(kDamping).free) type.param(kDampingNl) = freeParam(0.0);
+  }
+  return linear;
+}
+
+/// The least-squares solution of every column of `model`'s linearised equation error (rest
+/// lengths beside cubic terms, equation_error.h), iterated from the model's values while the
+/// linearised residual falls (Gauss-Newton; a step that raises it is undone); the values are
+/// written into the model.
+void convergeLinearized(Model* model, const Trajectory& fit, const EquationErrorOptions& ee) {
+  const std::vector<ParamRef> refs = freeParameters(*model);
+  double best_rss = std::numeric_limits<double>::infinity();
+  Model before_step = *model;
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    const EquationErrorSystem sys = buildEquationErrorSystem(*model, fit, ee);
+    const bool finite = sys.reason.empty() && sys.ata.allFinite() && sys.atb.allFinite();
+    std::vector<int> all;
+    for (size_t j = 0; finite && j < sys.column_param.size(); ++j)
+      if (sys.ata(j, j) > 0.0) all.push_back(static_cast<int>(j));
+    const Eigen::VectorXd theta = finite ? solveActive(sys, all, nullptr, nullptr) : Eigen::VectorXd();
+    const double r = finite ? rss(sys, theta) : kNan;
+    if (!finite || !theta.allFinite() || !(r < best_rss * (1.0 - 1e-6))) {
+      // No progress from this point: back to the one it was reached from (iteration 0: the start).
+      if (iteration > 0) *model = before_step;
+      return;
+    }
+    best_rss = r;
+    before_step = *model;
+    for (int j : all) {
+      const int partner = sys.column_partner[j];
+      double value = partner >= 0 ? theta[j] / theta[partner] : theta[j] + sys.column_offset[j];
+      if (!std::isfinite(value)) continue;
+      const ParamRef& r_ref = refs[sys.column_param[j]];
+      if (r_ref.bond_type >= 0 && r_ref.param == kRestLength && sys.column_offset[j] != 0.0) {
+        // A step of at most 20 % of the rest length: a bond with next to no stiffness (a
+        // candidate the data do not want) has next to no say on its length.
+        const double before = sys.column_offset[j];
+        value = std::min(std::max(value, 0.8 * before), 1.2 * before);
+      }
+      setParam(*model, r_ref, value);
+    }
+    if (r <= 1e-30 * std::max(sys.btb, 1e-300)) return;  // exact
+  }
+}
+
 StructureResult selectStructure(const Model& given, const Trajectory& data,
                                 const StructureOptions& options) {
   // The data's rate when the model states none (a live window, a model of particles alone).
@@ -815,6 +926,7 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
   struct Level {
     std::string name;
     bool dampers, flexion, viscosity;
+    int nonlinear_on = -1;  ///< >= 0: the non-linear terms on that level's kept bonds
   };
   std::vector<Level> levels = {{"springs", false, false, false}};
   if (options.try_dampers) levels.push_back({"springs+dampers", true, false, false});
@@ -824,24 +936,73 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
   say("structure: " + std::to_string(triples.size()) + " flexion candidate(s) on near-collinear triples; " +
       std::to_string(levels.size()) + " level(s) to try");
   std::vector<StructureCandidate> candidates;
+  // A level's typed model refitted by the full identification on the fitted frames (rest
+  // lengths of the non-linear level free again: the seeds are Gauss-Newton steps of the
+  // linearised equation error from the values) and judged on the held-out frames.
+  const auto refitAndJudge = [&](StructureCandidate* cand, bool nonlinear, int first_type) {
+    if (nonlinear)
+      for (size_t t = first_type; t < cand->model.bond_types.size(); ++t) {
+        BondType& type = cand->model.bond_types[t];
+        if (type.kind == BondKind::kSpring && type.param(kStiffness).free) type.param(kRestLength).free = true;
+      }
+    if (options.refit) {
+      IdentifyOptions io = options.identify;
+      io.cost = CostChoice::kShortTerm;  // ranking only: the final fit is the caller's
+      io.generations = std::min(io.generations, options.refit_generations);
+      io.max_wall_time_s = io.max_wall_time_s > 0.0 ? std::min(io.max_wall_time_s, options.refit_max_s)
+                                                    : options.refit_max_s;
+      io.estimate_std = false;
+      const IdentifyResult r = identifyModel(cand->model, fit, io);
+      cand->model = r.model;
+      cand->refit_cost_m2 = r.global_cost;
+    }
+    cand->parameters = static_cast<int>(freeParameters(cand->model).size());
+    heldOutErrors(cand->model, held, cand);
+    char line[256];
+    std::snprintf(line, sizeof(line),
+                  "structure: %s: %d bonds, %d types, %d parameters; held-out RMS 1/5/10 frames "
+                  "ahead %.3g / %.3g / %.3g mm",
+                  cand->name.c_str(), cand->bonds, cand->bond_types, cand->parameters,
+                  1e3 * cand->held_out_rms_m[0], 1e3 * cand->held_out_rms_m[1],
+                  1e3 * cand->held_out_rms_m[2]);
+    say(line);
+  };
   std::vector<std::string> signatures;  // per level: the kept structure before typing
-  for (const Level& level : levels) {
+  std::vector<Model> untyped;           // per level: the kept bonds, one type each, values set
+  const size_t cumulative_levels = levels.size();
+  for (size_t level_index = 0; level_index < levels.size(); ++level_index) {
+    const Level level = levels[level_index];
     const bool dampers = level.dampers;
+    const bool nonlinear = level.nonlinear_on >= 0;
     StructureCandidate cand;
     cand.name = level.name;
     Model full = model;
-    // Pairs the screening of an earlier level found start as candidates here.
-    addCandidateBonds(&full, std::vector<std::pair<int, int>>(all_candidates.begin(), all_candidates.end()),
-                      fit, dampers);
-    if (level.flexion) addCandidateFlexions(&full, triples, fit, dampers);
-    if (level.viscosity) addCandidateViscosities(&full);
+    if (nonlinear) {
+      // The non-linear level: the base level's kept bonds, values set.
+      full = untyped[level.nonlinear_on];
+    } else {
+      // Pairs the screening of an earlier level found start as candidates here.
+      addCandidateBonds(&full, std::vector<std::pair<int, int>>(all_candidates.begin(), all_candidates.end()),
+                        fit, dampers);
+      if (level.flexion) addCandidateFlexions(&full, triples, fit, dampers);
+      if (level.viscosity) addCandidateViscosities(&full);
+    }
+    // The non-linear level: rest lengths beside cubic terms enter linearised about the values.
+    EquationErrorOptions level_ee = ee;
+    level_ee.linearize_rest_length = nonlinear;
+    if (nonlinear) full = nonlinearCandidates(full, fit, ee, first_candidate_type);
+    Model kept_untyped;
     std::string signature;
     std::vector<Group> groups;
     int screening_rounds = 0;
     for (int pass = 0; pass < kMaxPasses; ++pass) {
-      const EquationErrorSystem sys = buildEquationErrorSystem(full, fit, ee);
+      if (nonlinear) convergeLinearized(&full, fit, level_ee);
+      const EquationErrorSystem sys = buildEquationErrorSystem(full, fit, level_ee);
       if (!sys.reason.empty())
         throw InputError("structure selection: the equation error does not apply: " + sys.reason);
+      if (!sys.ata.allFinite() || !sys.atb.allFinite() || !std::isfinite(sys.btb))
+        throw InputError("structure selection: " + cand.name + ": the equation error is not finite "
+                         "(positions or values too large?)");
       const std::vector<ParamRef> refs = freeParameters(full);
       groups.clear();
       std::map<int, int> spring_group_of_type;
@@ -857,11 +1018,11 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
           always.push_back(static_cast<int>(j));
           continue;
         }
-        if (r.param == kDamping) {
+        if (r.param == kDamping || r.param == kStiffnessNl || r.param == kDampingNl) {
           Group g;
           g.columns = {static_cast<int>(j)};
           g.bond_type = r.bond_type;
-          g.damper = true;
+          g.term = r.param;
           groups.push_back(g);
           continue;
         }
@@ -876,7 +1037,8 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
         groups[it->second].columns.push_back(static_cast<int>(j));
       }
       for (size_t g = 0; g < groups.size(); ++g)
-        if (groups[g].damper) groups[spring_group_of_type.at(groups[g].bond_type)].child = static_cast<int>(g);
+        if (groups[g].term >= 0)
+          groups[spring_group_of_type.at(groups[g].bond_type)].children.push_back(static_cast<int>(g));
       if (!gravity.columns.empty()) groups.push_back(gravity);
       // Columns no row touches (a pair never seen) start inactive.
       for (Group& g : groups)
@@ -902,7 +1064,7 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       // Bonds the neighbourhoods missed (long ones): pairs the residual asks for become
       // candidates too, and the selection runs again (at most 4 rounds of 20). Before the
       // non-physical drops: a missing bond makes true ones come out wrong.
-      if (screening_rounds < 4 && pass + 1 < kMaxPasses) {
+      if (!nonlinear && screening_rounds < 4 && pass + 1 < kMaxPasses) {
         std::set<std::pair<int, int>> have;
         for (const Bond& b : full.bonds)
           if (kindArity(full.bond_types[b.type].kind) == 2) have.insert(std::minmax(b.particles[0], b.particles[1]));
@@ -918,7 +1080,7 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
           continue;
         }
       }
-      if ((!solved.bad_bonds.empty() || !solved.bad_dampers.empty()) && pass + 1 < kMaxPasses) {
+      if ((!solved.bad_bonds.empty() || !solved.bad_terms.empty()) && pass + 1 < kMaxPasses) {
         // Kept bonds that came out non-physical lose their spring (the bond goes) or their
         // damper; then the system is solved again. A type without a bond keeps no free value.
         std::set<int> bad(solved.bad_bonds.begin(), solved.bad_bonds.end());
@@ -930,13 +1092,14 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
           BondType& type = full.bond_types[t];
           for (ParamId id : paramsOfKind(type.kind)) type.param(id) = Param();
         }
-        for (int t : solved.bad_dampers) full.bond_types[t].param(kDamping) = Param();
+        for (const auto& bad : solved.bad_terms)
+          full.bond_types[bad.first].param(static_cast<ParamId>(bad.second)) = Param();
         say("structure: " + cand.name + ": " + std::to_string(solved.bad_bonds.size()) +
-            " non-physical bond(s) and " + std::to_string(solved.bad_dampers.size()) +
-            " damper(s) dropped; solving again");
+            " non-physical bond(s) and " + std::to_string(solved.bad_terms.size()) +
+            " damping term(s) dropped; solving again");
         continue;
       }
-      if (!solved.bad_bonds.empty() || !solved.bad_dampers.empty())
+      if (!solved.bad_bonds.empty() || !solved.bad_terms.empty())
         result.notes.push_back(cand.name + ": non-physical values remained after " +
                                std::to_string(kMaxPasses) + " passes");
       // Types: one per bond, or shared where the values agree; the criterion decides.
@@ -944,7 +1107,8 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       int types = 0;
       Model typed = typeBonds(solved, first_candidate_type, options.type_sigmas, &types);
       // Types with no bond left (non-physical drops) do not exist in `solved.model`; typed too.
-      const EquationErrorResult typed_fit = solveEquationError(typed, fit, ee);
+      if (nonlinear) convergeLinearized(&typed, fit, level_ee);
+      const EquationErrorResult typed_fit = solveEquationError(typed, fit, level_ee);
       const int typed_params = static_cast<int>(freeParameters(typed).size());
       Model chosen = solved.model;
       double fit_rss = sel.rss_m2;
@@ -981,8 +1145,10 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       cand.fit_rms_m = std::sqrt(fit_rss / std::max<size_t>(sys.rows, 1));
       cand.bic = chosen_bic;
       signature = structureSignature(solved.model, first_candidate_type);
+      kept_untyped = solved.model;
       break;
     }
+    untyped.push_back(kept_untyped);
     // A level that kept none of its new components has an earlier level's structure: not
     // refitted nor judged again (its figures are that level's).
     const size_t same = std::find(signatures.begin(), signatures.end(), signature) - signatures.begin();
@@ -995,45 +1161,23 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       cand.same_as = earlier.same_as.empty() ? earlier.name : earlier.same_as;
       say("structure: " + name + ": none of its new components kept; the structure of " + cand.same_as);
       candidates.push_back(std::move(cand));
-      continue;
+      untyped.back() = untyped[same];
+    } else {
+      refitAndJudge(&cand, nonlinear, first_candidate_type);
+      candidates.push_back(std::move(cand));
     }
-    if (options.refit) {
-      IdentifyOptions io = options.identify;
-      io.cost = CostChoice::kShortTerm;  // ranking only: the final fit is the caller's
-      io.generations = std::min(io.generations, options.refit_generations);
-      io.max_wall_time_s = io.max_wall_time_s > 0.0 ? std::min(io.max_wall_time_s, options.refit_max_s)
-                                                    : options.refit_max_s;
-      io.estimate_std = false;
-      const IdentifyResult r = identifyModel(cand.model, fit, io);
-      cand.model = r.model;
-      cand.refit_cost_m2 = r.global_cost;
+    // After the cumulative levels: the non-linear terms on the best of them.
+    if (level_index + 1 == cumulative_levels && options.try_nonlinear) {
+      const int best = bestCandidate(candidates);
+      const int base = candidates[best].same_as.empty()
+                           ? best : static_cast<int>(std::find_if(candidates.begin(), candidates.end(),
+                               [&](const StructureCandidate& c) { return c.name == candidates[best].same_as; }) -
+                                                     candidates.begin());
+      levels.push_back({candidates[base].name + "+nonlinear", levels[base].dampers, levels[base].flexion,
+                        levels[base].viscosity, base});
     }
-    heldOutErrors(cand.model, held, &cand);
-    char line[256];
-    std::snprintf(line, sizeof(line),
-                  "structure: %s: %d bonds, %d types, %d parameters; held-out RMS 1/5/10 frames "
-                  "ahead %.3g / %.3g / %.3g mm",
-                  cand.name.c_str(), cand.bonds, cand.bond_types, cand.parameters,
-                  1e3 * cand.held_out_rms_m[0], 1e3 * cand.held_out_rms_m[1],
-                  1e3 * cand.held_out_rms_m[2]);
-    say(line);
-    candidates.push_back(std::move(cand));
   }
-  // The held-out 10-frame error decides; within 2 % of the best, the criterion (then fewer
-  // parameters) does.
-  double best_err = std::numeric_limits<double>::infinity();
-  for (const StructureCandidate& c : candidates)
-    if (std::isfinite(c.held_out_rms_m[2])) best_err = std::min(best_err, c.held_out_rms_m[2]);
-  int chosen = -1;
-  for (size_t i = 0; i < candidates.size(); ++i) {
-    const StructureCandidate& c = candidates[i];
-    const bool near = !std::isfinite(best_err) || (std::isfinite(c.held_out_rms_m[2]) &&
-                                                   c.held_out_rms_m[2] <= 1.02 * best_err);
-    if (!near) continue;
-    if (chosen < 0 || c.parameters < candidates[chosen].parameters ||
-        (c.parameters == candidates[chosen].parameters && c.bic < candidates[chosen].bic))
-      chosen = static_cast<int>(i);
-  }
+  const int chosen = bestCandidate(candidates);
   candidates[chosen].chosen = true;
   for (StructureCandidate& c : candidates) c.model.frame_rate_hz = given.frame_rate_hz;
   result.model = candidates[chosen].model;
@@ -1077,18 +1221,22 @@ StructureScore scoreStructure(const Model& truth, const Model& chosen) {
                  ? 2.0 * *precision[k] * *recall[k] / (*precision[k] + *recall[k]) : 0.0;
   }
   s.types = static_cast<int>(chosen.bond_types.size());
-  s.damped_everywhere = s.damped_nowhere = true;
+  s.damped_everywhere = s.damped_nowhere = s.cubic_everywhere = s.cubic_nowhere = true;
   for (const BondType& t : chosen.bond_types) {
     if (t.kind == BondKind::kViscosity) continue;
     const bool damped = t.value(kDamping) != 0.0;
     s.damped_everywhere = s.damped_everywhere && damped;
     s.damped_nowhere = s.damped_nowhere && !damped;
+    if (t.kind != BondKind::kSpring) continue;
+    const bool cubic = t.value(kStiffnessNl) != 0.0;
+    s.cubic_everywhere = s.cubic_everywhere && cubic;
+    s.cubic_nowhere = s.cubic_nowhere && !cubic;
   }
   for (int k = 0; k < 2; ++k)
     for (const auto& w : want[k]) {
       const auto g = got[k].find(w.first);
       if (g == got[k].end()) continue;
-      for (ParamId id : {kStiffness, k == 1 ? kRestAngle : kRestLength, kDamping}) {
+      for (ParamId id : {kStiffness, k == 1 ? kRestAngle : kRestLength, kDamping, kStiffnessNl, kDampingNl}) {
         const double truth_value = w.second->value(id);
         if (truth_value == 0.0) continue;
         s.max_relative_error = std::max(

@@ -111,6 +111,10 @@ Model makeRandomObject(const RandomObjectSpec& spec) {
       const double c = spec.damping_max_nspm * std::exp(std::log(0.1) * random.uniform());
       type.param(kDamping) = Param{c, true, true, true, c / 10.0, c * 10.0, true, true};
     }
+    if (spec.stiffness_nl_scale > 0.0) {
+      const double k_nl = (0.5 + 0.5 * random.uniform()) * spec.stiffness_nl_scale * k / (length * length);
+      type.param(kStiffnessNl) = Param{k_nl, true, true, true, k_nl / 10.0, k_nl * 10.0, true, true};
+    }
     model.bond_types.push_back(type);
   }
   return model;

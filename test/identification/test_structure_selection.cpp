@@ -105,6 +105,35 @@ TEST(StructureSelection, FlexionOnBentChainsIsFound) {
 
 TEST(StructureSelection, DampedFlexionOnBentChainsIsFound) { checkChainSelection(0.5, 7u); }
 
+// Hardening springs (a cubic term worth 5-10 % of the tension at 10 % strain): the non-linear
+// level, on the best linear level's bonds, finds the cubic terms and the refit every value.
+TEST(StructureSelection, CubicStiffnessIsFoundByTheNonLinearLevel) {
+  for (uint64_t seed : {8u, 9u}) {
+    mme::RandomObjectSpec spec;
+    spec.particles = 15;
+    spec.bond_types = 4;
+    spec.bonds = 28;
+    spec.stiffness_nl_scale = 10.0;
+    spec.seed = seed;
+    const mme::Model truth = mme::makeRandomObject(spec);
+    const mme::StructureResult r = select(truth, 240);
+    const mme::StructureScore c = mme::scoreStructure(truth, r.model);
+    SCOPED_TRACE("seed " + std::to_string(seed) + "\n" + mme::formatStructureReport(r));
+    EXPECT_GE(c.f1, 0.95);
+    EXPECT_EQ(c.types, 4);
+    EXPECT_TRUE(c.damped_nowhere);
+    EXPECT_LT(c.max_relative_error, 0.01);
+    const mme::StructureCandidate* chosen = nullptr;
+    for (const mme::StructureCandidate& cand : r.candidates)
+      if (cand.chosen) chosen = &cand;
+    ASSERT_NE(chosen, nullptr);
+    // The non-linear level on the best linear level's candidates (which may hold dampers or
+    // drags that the cubic terms then make unnecessary).
+    EXPECT_EQ(chosen->name.substr(chosen->name.size() - 10), "+nonlinear") << chosen->name;
+    for (const mme::BondType& t : r.model.bond_types) EXPECT_GT(t.value(mme::kStiffnessNl), 0.0) << t.name;
+  }
+}
+
 TEST(StructureSelection, TheReportListsEveryCandidateAndTheGuesses) {
   mme::RandomObjectSpec spec;
   spec.particles = 10;

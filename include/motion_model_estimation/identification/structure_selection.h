@@ -45,6 +45,9 @@ struct StructureOptions {
   bool try_flexion = true;        ///< the + flexion level (when some triple is near-collinear)
   double flexion_min_angle_rad = 2.4;  ///< a flexion candidate's mean angle at its vertex (~138 deg)
   bool try_viscosity = true;      ///< the + viscosity level
+  /// The non-linear level: on the kept bonds of the best level so far, a cubic stiffness per
+  /// spring (and a quadratic damping per damper), rest lengths held at the linear fit's.
+  bool try_nonlinear = true;
   bool refit = true;              ///< refit each level with identifyModel (else equation error only)
   int refit_generations = 100;    ///< the ranking refit's generation budget per level
   double refit_max_s = 20.0;      ///< ... and wall time [s]
@@ -100,8 +103,11 @@ struct StructureScore {
   int types = 0;                   ///< bond types of the chosen model
   bool damped_everywhere = false;  ///< every chosen type has a non-zero damping
   bool damped_nowhere = false;     ///< no chosen type has one
-  /// Largest relative error of k, L (theta0) and c of a true bond's chosen type against its true
-  /// type, over the true bonds and flexions found (damping only where the truth has one).
+  bool cubic_everywhere = false;   ///< every chosen spring type has a cubic stiffness
+  bool cubic_nowhere = false;      ///< no chosen spring type has one
+  /// Largest relative error of k, L (theta0), c, k_nl and c_nl of a true bond's chosen type
+  /// against its true type, over the true bonds and flexions found (each term only where the
+  /// truth has it).
   double max_relative_error = 0.0;
 };
 StructureScore scoreStructure(const Model& truth, const Model& chosen);

@@ -17,6 +17,9 @@ struct RandomObjectSpec {
   /// > 0: every type also has a free damping, drawn log-uniformly in [damping_max / 10,
   /// damping_max] [N s/m] (light: the floating object keeps moving for tens of seconds).
   double damping_max_nspm = 0.0;
+  /// > 0: every type also has a free cubic stiffness k_nl = u * this * k / L^2 (u uniform in
+  /// [0.5, 1]; hardening: at a strain of 10 % it adds u * this % to the tension) [1].
+  double stiffness_nl_scale = 0.0;
   uint64_t seed = 1;
 };
 
