@@ -8,6 +8,7 @@
 
 #include "engine.h"
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/muscle.h"
 #include "motion_model_estimation/core/spatial_grid.h"
 
 namespace mme {
@@ -54,12 +55,22 @@ void LawTable::load(const Model& model) {
   flexion.assign(nt, FlexionLaw());
   viscosity_nspm.assign(nt, 0.0);
   max_elongation.assign(nt, 0.0);
+  muscle.assign(nt, MuscleTypeLaw());
+  network.clear();
+  // Every law form of every type is filled (absent parameters read 0): a kind only reads its
+  // own form, and this stays independent of the kind.
   for (size_t t = 0; t < nt; ++t) {
     const BondType& type = model.bond_types[t];
     spring[t] = springLawOf(type);
     flexion[t] = flexionLawOf(type);
     viscosity_nspm[t] = type.value(kViscosity);
     max_elongation[t] = type.value(kMaxElongation);
+    MuscleTypeLaw& m = muscle[t];
+    m.gain_n = type.value(kGain);
+    m.inputs = type.network_inputs;
+    m.hidden = type.network_hidden;
+    m.network_offset = static_cast<uint32_t>(network.size());
+    for (const Param& p : type.network) network.push_back(p.present ? p.value : 0.0);
   }
   const Eigen::Vector3d g = model.gravity();
   for (int k = 0; k < 3; ++k) gravity_mps2[k] = g[k];
@@ -71,11 +82,15 @@ void LawTable::set(const ParamRef& ref, double value) {
     return;
   }
   const size_t t = static_cast<size_t>(ref.bond_type);
+  if (ref.isNetwork()) {
+    network[muscle[t].network_offset + static_cast<uint32_t>(ref.param - kParamCount)] = value;
+    return;
+  }
   SpringLaw& s = spring[t];
   FlexionLaw& fl = flexion[t];
   // A parameter id means the same thing in both law forms where both have it; writing both
   // keeps this independent of the type's kind (the unused form is never read).
-  switch (ref.param) {
+  switch (static_cast<ParamId>(ref.param)) {
     case kStiffness: s.stiffness = value; fl.stiffness = value; break;
     case kRestLength: s.rest_length = value; break;
     case kDamping: s.damping = value; fl.damping = value; break;
@@ -86,7 +101,8 @@ void LawTable::set(const ParamRef& ref, double value) {
     case kMaxElongation: max_elongation[t] = value; break;
     case kRestAngle: fl.rest_angle = value; break;
     case kViscosity: viscosity_nspm[t] = value; break;
-    default: break;
+    case kGain: muscle[t].gain_n = value; break;
+    case kParamCount: break;  // not a parameter (network parameters are handled above)
   }
 }
 
@@ -130,7 +146,37 @@ Engine::Engine(const Model& model) {
         if (type.param(kMaxElongation).present)
           clamps_.push_back({b.particles[0], b.particles[1], b.type});
         break;
+      case BondKind::kMuscle: {
+        MuscleBond m{b.particles[0], b.particles[1], b.type,
+                     static_cast<uint32_t>(muscle_inputs_.size()), 0};
+        for (int in : b.inputs) {
+          const Bond& ib = model.bonds[in];
+          muscle_inputs_.push_back({ib.particles[0], ib.particles[1], ib.type});
+        }
+        m.input_end = static_cast<uint32_t>(muscle_inputs_.size());
+        muscles_.push_back(m);
+        break;
+      }
     }
+  }
+}
+
+void Engine::muscleForces(const LawTable& laws, const double* x, const double* v,
+                          double* f) const {
+  double z[2 * kMaxMuscleInputs];  // validateModel bounds the input count
+  for (const MuscleBond& m : muscles_) {
+    const MuscleTypeLaw& law = laws.muscle[m.type];
+    const int n_in = static_cast<int>(m.input_end - m.input_begin);
+    for (int k = 0; k < n_in; ++k) {
+      const InputBond& ib = muscle_inputs_[m.input_begin + k];
+      const int a = 3 * ib.a, b = 3 * ib.b;
+      elongationRaw(laws.spring[ib.type].rest_length, x + a, x + b, v + a, v + b, &z[k],
+                    &z[n_in + k]);
+    }
+    const double activation_n = muscleActivation(laws.network.data() + law.network_offset,
+                                                 n_in, law.hidden, law.gain_n, z);
+    const int a = 3 * m.a, b = 3 * m.b;
+    musclePair(laws.spring[m.type], activation_n, x + a, x + b, v + a, v + b, f + a, f + b);
   }
 }
 
@@ -158,6 +204,7 @@ void Engine::forces(const LawTable& laws, const double* x, const double* v, doub
     flexionForceRaw(laws.flexion[b.type], x + a, x + m, x + c, v + a, v + m, v + c, f + a, f + m,
                     f + c);
   }
+  if (!muscles_.empty()) muscleForces(laws, x, v, f);
   for (size_t r = 0; r < num_inter_runs; ++r) {
     const SpringRun& run = inter_runs[r];
     springRun(inter_laws[run.law], inter_pairs, run.begin, run.end, x, v, f);
@@ -203,6 +250,9 @@ double Engine::bondEnergy(const LawTable& laws, const double* x) const {
                            x + 3 * spring_pairs_[k].b);
   for (const FlexionBond& b : flexions_)
     e += flexionEnergyRaw(laws.flexion[b.type], x + 3 * b.a, x + 3 * b.b, x + 3 * b.c);
+  // A muscle's passive part only: its activation is a driving force, not a potential.
+  for (const MuscleBond& m : muscles_)
+    e += springEnergyRaw(laws.spring[m.type], x + 3 * m.a, x + 3 * m.b);
   return e;
 }
 

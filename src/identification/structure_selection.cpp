@@ -590,6 +590,12 @@ StructureResult selectStructure(const Model& model, const Trajectory& data,
   if (!model.interactions.empty())
     throw InputError("structure selection: the model has interactions (bonds found on the fly); "
                      "give the particles and fixed bonds only");
+  // Pruning renumbers bonds, which a muscle's input list would not follow; and a muscle's
+  // network is not linear, so the equation error this selection rests on cannot weigh it.
+  for (const BondType& type : model.bond_types)
+    if (bondKindInfo(type.kind).network)
+      throw InputError("structure selection: the model has muscles (type '" + type.name +
+                       "'); select the passive structure first, then add the muscles");
   const int frames = data.numFrames();
   const int held_frames = std::max(15, static_cast<int>(std::lround(options.held_out_share * frames)));
   const int fit_frames = frames - held_frames;
