@@ -69,19 +69,47 @@ TEST(MuscleIdentification, TheEquationErrorLeavesMuscleParametersToTheSearch) {
   EXPECT_LT(mme::test::maxRelativeError(sol.values, truth), 1e-6);
 }
 
-TEST(MuscleIdentification, TheEvolutionStrategyIdentifiesAMuscle) {
+// The muscle's spring part, gain and network (9 parameters, no initial values) from 80 noiseless
+// frames. Fitting a network is multimodal: from 6 seeds, 3 (1, 4, 6) recover every parameter to
+// round-off and the others stall in local minima (costs 1e-6..4e-4 m^2), every one of them still
+// far below the best passive model (the muscle as a plain spring, 2e-3 m^2). The test asserts
+// exactly that; the default seed is one that recovers.
+TEST(MuscleIdentification, TheEvolutionStrategyIdentifiesAMuscleFromNoInitialValues) {
   const Model truth = freeMuscle(true);
   const mme::Trajectory data = mme::simulateTrajectory(truth, 80, 100.0);
-  const Model search = mme::test::withoutValues(truth);
-  mme::IdentifyOptions options;
-  options.generations = 300;
-  options.estimate_std = false;
-  const mme::IdentifyResult r = mme::identifyModel(search, data, options);
   const std::vector<double> want = mme::getValues(truth, mme::freeParameters(truth));
-  for (size_t k = 0; k < want.size(); ++k)
-    std::printf("%-12s %12.6g %12.6g\n", r.parameters[k].name.c_str(), want[k], r.values[k]);
-  std::printf("cost %g generations %d evaluations %llu wall %.2f s\n", r.global_cost, r.generations,
-              static_cast<unsigned long long>(r.evaluations), r.wall_time_s);
+  ASSERT_EQ(want.size(), 9u);
+
+  Model passive = mme::test::muscleObject();
+  mme::BondType& t = passive.bond_types[passive.bondTypeIndex("m")];
+  t.param(mme::kGain).value = 0.0;
+  for (mme::ParamId id : {mme::kStiffness, mme::kRestLength, mme::kDamping}) t.param(id).free = true;
+  mme::IdentifyOptions passive_options;
+  passive_options.generations = 400;
+  passive_options.estimate_std = false;
+  const double passive_cost =
+      mme::identifyModel(mme::test::withoutValues(passive), data, passive_options).global_cost;
+  EXPECT_GT(passive_cost, 1e-3);
+
+  int recovered = 0;
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    mme::IdentifyOptions options;
+    options.generations = 400;
+    options.patience_generations = 0;  // a network's fit keeps improving after plateaus
+    options.es.seed = seed;
+    options.estimate_std = false;
+    const mme::IdentifyResult r = mme::identifyModel(mme::test::withoutValues(truth), data, options);
+    const double error = mme::test::maxRelativeError(r.values, want);
+    SCOPED_TRACE("seed " + std::to_string(seed) + ": cost " + std::to_string(r.global_cost) +
+                 ", largest relative error " + std::to_string(error));
+    if (seed == 1) {
+      EXPECT_LT(error, 1e-6);
+      EXPECT_LT(r.global_cost / data.numFrames(), 1e-26);
+    }
+    recovered += error < 1e-6;
+    EXPECT_LT(r.global_cost, 0.25 * passive_cost);
+  }
+  EXPECT_GE(recovered, 3);
 }
 
 }  // namespace
