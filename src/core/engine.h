@@ -57,7 +57,7 @@ struct InputBond {
 /// LawTable::network.
 struct MuscleTypeLaw {
   double gain_n = 0.0;
-  int32_t inputs = 0, hidden = 0;
+  int32_t hidden = 0;  // the input count is the bond's (validateModel: the type's)
   uint32_t network_offset = 0;
 };
 

@@ -67,7 +67,6 @@ void LawTable::load(const Model& model) {
     max_elongation[t] = type.value(kMaxElongation);
     MuscleTypeLaw& m = muscle[t];
     m.gain_n = type.value(kGain);
-    m.inputs = type.network_inputs;
     m.hidden = type.network_hidden;
     m.network_offset = static_cast<uint32_t>(network.size());
     for (const Param& p : type.network) network.push_back(p.present ? p.value : 0.0);

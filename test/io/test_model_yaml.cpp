@@ -422,17 +422,19 @@ const std::vector<std::string> kBase = {
     "  - {type: s, particles: [a, b]}",      // 15
 };
 
-/// kBase with line `line` (1-based) replaced by `text`; line = size+1 appends.
-std::string edited(int line, const std::string& text) {
+/// `base` with line `line` (1-based) replaced by `text`; line = size+1 appends.
+std::string editedLines(const std::vector<std::string>& base, int line, const std::string& text) {
   std::string out;
-  for (int i = 1; i <= static_cast<int>(kBase.size()) + 1; ++i) {
+  for (int i = 1; i <= static_cast<int>(base.size()) + 1; ++i) {
     if (i == line)
       out += text + "\n";
-    else if (i <= static_cast<int>(kBase.size()))
-      out += kBase[i - 1] + "\n";
+    else if (i <= static_cast<int>(base.size()))
+      out += base[i - 1] + "\n";
   }
   return out;
 }
+
+std::string edited(int line, const std::string& text) { return editedLines(kBase, line, text); }
 
 std::string errorOf(const std::string& yaml, const std::string& source = "bad.yaml") {
   try {
@@ -576,14 +578,7 @@ const std::vector<std::string> kMuscleBase = {
 };
 
 std::string muscleEdited(int line, const std::string& text) {
-  std::string out;
-  for (int i = 1; i <= static_cast<int>(kMuscleBase.size()) + 1; ++i) {
-    if (i == line)
-      out += text + "\n";
-    else if (i <= static_cast<int>(kMuscleBase.size()))
-      out += kMuscleBase[i - 1] + "\n";
-  }
-  return out;
+  return editedLines(kMuscleBase, line, text);
 }
 
 TEST(ModelYaml, MuscleLoadsItsNetworkAndInputs) {
