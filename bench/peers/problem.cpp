@@ -51,6 +51,7 @@ std::string llsVerdict(const mme::Model& model) {
       case mme::BondKind::kSpring: break;
       case mme::BondKind::kFlexion: return "flexion bonds (non-linear in the angle)";
       case mme::BondKind::kMuscle: return "muscles (a network of other bonds' motion)";
+      case mme::BondKind::kFloor: return "ground contact (conditional on the height)";
       case mme::BondKind::kViscosity:
         if (t.param(mme::kViscosity).free) return "free viscosity";
         continue;

@@ -19,13 +19,15 @@ BondKindInfo makeInfo(BondKind kind) {
       return {kind, "viscosity", 1, {kViscosity}, false, false, false};
     case BondKind::kMuscle:
       return {kind, "muscle", 2, {kStiffness, kRestLength, kDamping, kGain}, true, false, true};
+    case BondKind::kFloor:  // a conditional bond to the floor plane: ground contact
+      return {kind, "floor", 1, {kStiffness, kDamping, kFriction, kHeight}, false, false, false};
   }
   return {kind, "?", 0, {}, false, false, false};  // not reached: every enumerator is listed
 }
 
 struct Catalogue {
   std::vector<BondKind> kinds{BondKind::kSpring, BondKind::kFlexion, BondKind::kViscosity,
-                              BondKind::kMuscle};
+                              BondKind::kMuscle, BondKind::kFloor};
   std::vector<BondKindInfo> infos;
   Catalogue() {
     for (BondKind k : kinds) infos.push_back(makeInfo(k));
@@ -52,6 +54,8 @@ const char* paramKey(ParamId id) {
     case kRestAngle: return "rest_angle";
     case kViscosity: return "viscosity";
     case kGain: return "gain";
+    case kFriction: return "friction";
+    case kHeight: return "height";
     case kParamCount: break;
   }
   return "?";

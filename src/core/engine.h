@@ -40,7 +40,7 @@ struct FlexionBond {
 };
 struct UnaryBond {
   int32_t p, type;
-};
+};  // viscosity and floor bonds
 struct ClampBond {
   int32_t a, b, type;
 };
@@ -68,6 +68,7 @@ struct LawTable {
   std::vector<FlexionLaw> flexion;
   std::vector<double> viscosity_nspm;    ///< unary viscosity c
   std::vector<double> max_elongation;    ///< Provot tau (only used by clamp bonds)
+  std::vector<FloorLaw> floor;           ///< ground contact
   std::vector<MuscleTypeLaw> muscle;     ///< activation of muscle types (passive part: spring)
   std::vector<double> network;           ///< every muscle type's network parameters, concatenated
   double gravity_mps2[3] = {0, 0, 0};
@@ -157,6 +158,15 @@ inline void musclePair(const SpringLaw& law, double activation_n, const double* 
   const double fx = t * ux, fy = t * uy, fz = t * uz;
   fa[0] += fx; fa[1] += fy; fa[2] += fz;
   fb[0] -= fx; fb[1] -= fy; fb[2] -= fz;
+}
+
+/// Ground contact (FloorLaw): normal penalty force while below the plane, viscous friction.
+inline void floorForceRaw(const FloorLaw& law, const double* x, const double* v, double* f) {
+  const double penetration_m = law.height - x[2];
+  if (!(penetration_m > 0.0)) return;
+  f[0] -= law.friction * v[0];
+  f[1] -= law.friction * v[1];
+  f[2] += std::max(0.0, law.stiffness * penetration_m - law.damping * v[2]);
 }
 
 /// Elongation l - rest_length [m] and elongation speed (v_b - v_a).u [m/s] of a pair bond.
@@ -255,7 +265,8 @@ class Engine {
   size_t numMuscles() const { return muscles_.size(); }
   const std::vector<uint8_t>& fixed() const { return fixed_; }
 
-  /// f = gravity + unary viscosity + installed springs + flexion + muscles + the given interaction runs
+  /// f = gravity + unary viscosity + installed springs + flexion + muscles + floor contacts + the
+  /// given interaction runs
   /// (pairs[run.begin..run.end) with law inter_laws[run.law]).
   void forces(const LawTable& laws, const double* x, const double* v, double* f,
               const SpringLaw* inter_laws, const PairIdx* inter_pairs,
@@ -277,6 +288,7 @@ class Engine {
   std::vector<SpringRun> spring_runs_;
   std::vector<FlexionBond> flexions_;
   std::vector<UnaryBond> unary_;
+  std::vector<UnaryBond> floors_;  // in bond order
   std::vector<ClampBond> clamps_;  // in bond order
   std::vector<MuscleBond> muscles_;      // in bond order
   std::vector<InputBond> muscle_inputs_;

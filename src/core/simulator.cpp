@@ -41,6 +41,15 @@ SpringLaw springLawOf(const BondType& type) {
   return law;
 }
 
+FloorLaw floorLawOf(const BondType& type) {
+  FloorLaw law;
+  law.stiffness = type.value(kStiffness);
+  law.damping = type.value(kDamping);
+  law.friction = type.value(kFriction);
+  law.height = type.value(kHeight);
+  return law;
+}
+
 FlexionLaw flexionLawOf(const BondType& type) {
   FlexionLaw law;
   law.stiffness = type.value(kStiffness);
@@ -55,6 +64,7 @@ void LawTable::load(const Model& model) {
   flexion.assign(nt, FlexionLaw());
   viscosity_nspm.assign(nt, 0.0);
   max_elongation.assign(nt, 0.0);
+  floor.assign(nt, FloorLaw());
   muscle.assign(nt, MuscleTypeLaw());
   network.clear();
   // Every law form of every type is filled (absent parameters read 0): a kind only reads its
@@ -63,6 +73,7 @@ void LawTable::load(const Model& model) {
     const BondType& type = model.bond_types[t];
     spring[t] = springLawOf(type);
     flexion[t] = flexionLawOf(type);
+    floor[t] = floorLawOf(type);
     viscosity_nspm[t] = type.value(kViscosity);
     max_elongation[t] = type.value(kMaxElongation);
     MuscleTypeLaw& m = muscle[t];
@@ -87,12 +98,13 @@ void LawTable::set(const ParamRef& ref, double value) {
   }
   SpringLaw& s = spring[t];
   FlexionLaw& fl = flexion[t];
-  // A parameter id means the same thing in both law forms where both have it; writing both
-  // keeps this independent of the type's kind (the unused form is never read).
+  FloorLaw& fc = floor[t];
+  // A parameter id means the same thing in every law form that has it; writing them all keeps
+  // this independent of the type's kind (the unused forms are never read).
   switch (static_cast<ParamId>(ref.param)) {
-    case kStiffness: s.stiffness = value; fl.stiffness = value; break;
+    case kStiffness: s.stiffness = value; fl.stiffness = value; fc.stiffness = value; break;
     case kRestLength: s.rest_length = value; break;
-    case kDamping: s.damping = value; fl.damping = value; break;
+    case kDamping: s.damping = value; fl.damping = value; fc.damping = value; break;
     case kStiffnessNl: s.stiffness_nl = value; break;
     case kDampingNl: s.damping_nl = value; break;
     case kMinDistance: s.min_distance = value; break;
@@ -101,6 +113,8 @@ void LawTable::set(const ParamRef& ref, double value) {
     case kRestAngle: fl.rest_angle = value; break;
     case kViscosity: viscosity_nspm[t] = value; break;
     case kGain: muscle[t].gain_n = value; break;
+    case kFriction: fc.friction = value; break;
+    case kHeight: fc.height = value; break;
     case kParamCount: break;  // not a parameter (network parameters are handled above)
   }
 }
@@ -141,6 +155,7 @@ Engine::Engine(const Model& model) {
         flexions_.push_back({b.particles[0], b.particles[1], b.particles[2], b.type});
         break;
       case BondKind::kViscosity: unary_.push_back({b.particles[0], b.type}); break;
+      case BondKind::kFloor: floors_.push_back({b.particles[0], b.type}); break;
       case BondKind::kSpring:
         if (type.param(kMaxElongation).present)
           clamps_.push_back({b.particles[0], b.particles[1], b.type});
@@ -204,6 +219,10 @@ void Engine::forces(const LawTable& laws, const double* x, const double* v, doub
                     f + c);
   }
   if (!muscles_.empty()) muscleForces(laws, x, v, f);
+  for (const UnaryBond& u : floors_) {
+    const int p = 3 * u.p;
+    floorForceRaw(laws.floor[u.type], x + p, v + p, f + p);
+  }
   for (size_t r = 0; r < num_inter_runs; ++r) {
     const SpringRun& run = inter_runs[r];
     springRun(inter_laws[run.law], inter_pairs, run.begin, run.end, x, v, f);

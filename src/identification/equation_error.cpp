@@ -155,6 +155,8 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
         // The activation is a network of other bonds' motion: every free muscle parameter is
         // left to the evolution strategy and the refinements (README "Muscles").
         break;
+      case BondKind::kFloor:  // conditional on contact: left to the search too
+        break;
     }
     if (!linear) {
       out.reason = "'" + r.name + "' does not enter the forces linearly";
@@ -178,7 +180,8 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
       case BondKind::kSpring: rest_param = kRestLength; break;
       case BondKind::kFlexion: rest_param = kRestAngle; break;
       case BondKind::kViscosity:
-      case BondKind::kMuscle: continue;  // no rest parameter solved for
+      case BondKind::kMuscle:
+      case BondKind::kFloor: continue;  // no rest parameter solved for
     }
     const int rest = freeIndex(static_cast<int>(t), rest_param);
     if (rest < 0) continue;
@@ -313,6 +316,7 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
         add(b.particles[0], tc.viscosity, -state.v_mps[b.particles[0]]);
         break;
       case BondKind::kMuscle:  // no unknowns: its force is in known_force
+      case BondKind::kFloor:
         break;
       }
     }

@@ -17,7 +17,12 @@ bool isLengthLike(int param) {
 
 /// Network weights and biases are signed; the muscle gain is positive (its sign would mirror
 /// the output weights'), so it is searched in log space like other magnitudes.
-bool isPositivePhysical(int param) { return param != kRestAngle && param < kParamCount; }
+bool isPositivePhysical(int param) {
+  return param != kRestAngle && param != kHeight && param < kParamCount;
+}
+
+/// Default half-width of a floor height's search range around its guess (or 0) [m].
+constexpr double kFloorHeightRange_m = 1.0;
 
 /// Default search range of a muscle's network parameter (README "Muscles"): weights read
 /// elongations of centimetres, so +-100 [1/m] (or [s/m]) reaches tanh's saturation; biases
@@ -126,6 +131,10 @@ ParameterSpace::ParameterSpace(const Model& model, const Trajectory& trajectory)
       lo = 0.0; hi = M_PI;
     } else if (ref.param == kMaxElongation) {
       lo = 1e-3; hi = 10.0;
+    } else if (ref.param == kHeight) {
+      const double guess = p.has_value ? p.value : 0.0;
+      lo = guess - kFloorHeightRange_m;
+      hi = guess + kFloorHeightRange_m;
     } else if (ref.isNetwork()) {
       hi = isNetworkBias(model, ref) ? kNetworkBiasBound : kNetworkWeightBound;
       lo = -hi;

@@ -15,7 +15,7 @@ using mme::bondKindInfo;
 
 TEST(BondKind, TheCatalogueHasOneEntryPerKindInEnumOrder) {
   const std::vector<BondKind>& kinds = mme::allBondKinds();
-  ASSERT_EQ(kinds.size(), 4u);
+  ASSERT_EQ(kinds.size(), 5u);
   std::set<std::string> names;
   for (size_t k = 0; k < kinds.size(); ++k) {
     EXPECT_EQ(static_cast<size_t>(kinds[k]), k);
@@ -33,7 +33,7 @@ TEST(BondKind, NamesRoundTripAndUnknownNamesAreNull) {
   }
   EXPECT_EQ(mme::bondKindByName("hinge"), nullptr);
   EXPECT_EQ(mme::bondKindByName(""), nullptr);
-  EXPECT_EQ(mme::bondKindNameList(), "spring, flexion, viscosity or muscle");
+  EXPECT_EQ(mme::bondKindNameList(), "spring, flexion, viscosity, muscle or floor");
 }
 
 TEST(BondKind, FactsOfEachKind) {
@@ -49,7 +49,11 @@ TEST(BondKind, FactsOfEachKind) {
   EXPECT_TRUE(bondKindInfo(BondKind::kSpring).has_elongation);
   EXPECT_FALSE(bondKindInfo(BondKind::kFlexion).has_elongation);
   EXPECT_FALSE(bondKindInfo(BondKind::kViscosity).has_elongation);
-  for (BondKind k : {BondKind::kSpring, BondKind::kFlexion, BondKind::kViscosity})
+  EXPECT_EQ(bondKindInfo(BondKind::kFloor).arity, 1);
+  EXPECT_EQ(bondKindInfo(BondKind::kFloor).params,
+            (std::vector<mme::ParamId>{mme::kStiffness, mme::kDamping, mme::kFriction, mme::kHeight}));
+  EXPECT_FALSE(bondKindInfo(BondKind::kFloor).has_elongation);
+  for (BondKind k : {BondKind::kSpring, BondKind::kFlexion, BondKind::kViscosity, BondKind::kFloor})
     EXPECT_FALSE(bondKindInfo(k).network) << bondKindInfo(k).name;
   // The model's helpers read the same table.
   for (BondKind k : mme::allBondKinds()) {

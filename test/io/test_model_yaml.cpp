@@ -544,7 +544,7 @@ TEST(ModelYamlErrors, MalformedNumber) {
 
 TEST(ModelYamlErrors, UnknownKind) {
   expectError(edited(12, "    kind: hinge"), 12, "kind",
-              "unknown kind 'hinge' (expected spring, flexion, viscosity or muscle)");
+              "unknown kind 'hinge' (expected spring, flexion, viscosity, muscle or floor)");
 }
 
 // ------------------------------------------------------------------------------ muscles

@@ -9,15 +9,15 @@
 
 namespace mme {
 
-enum class BondKind { kSpring, kFlexion, kViscosity, kMuscle };
+enum class BondKind { kSpring, kFlexion, kViscosity, kMuscle, kFloor };
 
 /// Every fixed-size parameter a bond type can carry. Which ones apply depends on the kind
 /// (BondKindInfo::params). A muscle's network parameters are not here: their number depends on
 /// the type (BondType::network, see muscle.h).
 enum ParamId : int {
-  kStiffness = 0,     ///< spring, muscle [N/m]; flexion [N m/rad]
+  kStiffness = 0,     ///< spring, muscle, floor [N/m]; flexion [N m/rad]
   kRestLength,        ///< spring, muscle [m]
-  kDamping,           ///< spring, muscle [N s/m]; flexion [N m s/rad]
+  kDamping,           ///< spring, muscle, floor [N s/m]; flexion [N m s/rad]
   kStiffnessNl,       ///< spring cubic term [N/m^3]
   kDampingNl,         ///< spring quadratic damping [N s^2/m^2]
   kMinDistance,       ///< spring active only when length >= it [m]
@@ -26,6 +26,8 @@ enum ParamId : int {
   kRestAngle,         ///< flexion [rad]
   kViscosity,         ///< unary viscosity [N s/m]
   kGain,              ///< muscle output gain [N]: activation = gain * tanh(network output)
+  kFriction,          ///< floor: viscous friction along the floor while in contact [N s/m]
+  kHeight,            ///< floor: height of the floor plane z = height [m] (world z up)
   kParamCount
 };
 
@@ -55,7 +57,7 @@ const BondKindInfo& bondKindInfo(BondKind kind);
 const BondKindInfo* bondKindByName(const std::string& name);
 /// Every kind, in enum order.
 const std::vector<BondKind>& allBondKinds();
-/// "spring, flexion, viscosity or muscle": for error messages.
+/// "spring, flexion, viscosity, muscle or floor": for error messages.
 std::string bondKindNameList();
 
 }  // namespace mme
