@@ -496,8 +496,8 @@ void onlineExperiment(const Settings& s) {
 }
 
 /// Structure selection (issue 15): random objects of known structure (15-25 markers, springs
-/// only and springs + dampers, noiseless, 10 seeds each), a 40-marker object for the time, and
-/// the real recordings (held-out frames as the judge).
+/// only, springs + dampers, hardening springs; bent chains with flexion; noiseless, 10 seeds
+/// each), a 40-marker object for the time, and the real recordings (held-out frames as the judge).
 void structureExperiment(const Settings& s) {
   std::FILE* f = openCsv(s.out_dir + "/structure.csv",
                          "case,seed,markers,true_bonds,true_types,candidate_bonds,bonds,types,"
@@ -520,8 +520,11 @@ void structureExperiment(const Settings& s) {
     const mme::StructureResult r = mme::selectStructure(particles, data, so);
     const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const mme::StructureScore sc = mme::scoreStructure(truth, r.model);
-    const bool damped = truth.bond_types[0].value(mme::kDamping) != 0.0;
-    const bool exact = damped ? sc.damped_everywhere : sc.damped_nowhere;
+    // The components: dampers, cubic terms, flexion and drags exactly where the truth has them.
+    const mme::StructureScore self = mme::scoreStructure(truth, truth);
+    const bool exact = (self.damped_everywhere ? sc.damped_everywhere : sc.damped_nowhere) &&
+                       (self.cubic_everywhere ? sc.cubic_everywhere : sc.cubic_nowhere) &&
+                       sc.flexion_f1 == 1.0 && sc.viscosity_bonds == self.viscosity_bonds;
     const int true_types = static_cast<int>(truth.bond_types.size());
     const bool types_ok = std::abs(sc.types - true_types) <= 0.1 * true_types;
     std::fprintf(f, "%s,%d,%zu,%zu,%d,%d,%zu,%d,%.4f,%d,%d,%.6g,%.3f\n", name.c_str(), seed,
@@ -545,6 +548,25 @@ void structureExperiment(const Settings& s) {
       spec.seed = 300 + seed;
       run(damped ? "springs_dampers" : "springs", seed, mme::makeRandomObject(spec), 240, 0.0);
     }
+  // Bent chains with flexion (3-5 chains of 4-6 particles, half of them damped) and hardening
+  // springs (cubic terms worth 5-10 % of the tension at 10 % strain).
+  for (int seed = 1; seed <= seeds; ++seed) {
+    mme::ChainObjectSpec spec;
+    spec.chains = 3 + seed % 3;
+    spec.links = 4 + (seed / 3) % 3;
+    spec.damping_max_nspm = seed % 2 ? 0.0 : 0.5;
+    spec.seed = 500 + seed;
+    run("chains_flexion", seed, mme::makeChainObject(spec), 240, 0.0);
+  }
+  for (int seed = 1; seed <= seeds; ++seed) {
+    mme::RandomObjectSpec spec;
+    spec.particles = 15 + (7 * seed) % 11;
+    spec.bond_types = 6;
+    spec.bonds = 2 * spec.particles;
+    spec.stiffness_nl_scale = 10.0;
+    spec.seed = 600 + seed;
+    run("springs_cubic", seed, mme::makeRandomObject(spec), 240, 0.0);
+  }
   // Not a target yet: the same springs-only objects with 10 um of marker noise, 600 frames.
   for (int seed = 1; seed <= (s.quick ? 0 : 5); ++seed) {
     mme::RandomObjectSpec spec;

@@ -22,12 +22,16 @@ namespace {
 enum class Role {
   kDirect,   ///< the coefficient is the parameter (k, c, c_v, g, or L / theta0 with k known)
   kProduct,  ///< the coefficient is k x parameter (k L, k theta0): parameter = it / k's column
+  /// A spring's rest length beside a free cubic term, linearised about the model's values (a
+  /// Gauss-Newton step): the coefficient is L - L0, parameter = it + L0.
+  kLinearized,
 };
 
 struct Column {
   int param;        ///< index into freeParameters()
   Role role;
   int partner = -1; ///< kProduct: the stiffness column
+  double offset = 0.0;  ///< kLinearized: L0
 };
 
 /// Per bond type: the column of each linear unknown (-1 = known).
@@ -35,8 +39,11 @@ struct TypeColumns {
   int k = -1;        ///< stiffness, or the stiffness of a (k, kL) / (k, k theta0) pair
   int product = -1;  ///< k L (spring) or k theta0 (flexion), when both are free
   int rest = -1;     ///< L or theta0 alone (stiffness known): coefficient = the parameter
+  int rest_step = -1;  ///< L - L0 (kLinearized): k, L and k_nl all free, linearised about L0
   int damping = -1;
   int viscosity = -1;
+  int stiffness_nl = -1;  ///< spring cubic term (its rest length known)
+  int damping_nl = -1;    ///< spring quadratic damping
 };
 
 /// Positions, velocities and accelerations of frame t from the raw frame step or a local
@@ -132,13 +139,27 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
           columns.push_back({static_cast<int>(k), Role::kDirect});
           linear = true;
         } else if (r.param == rest_param) {
-          if (spring && type.value(kStiffnessNl) != 0.0) {
+          const bool cubic =
+              spring && (type.value(kStiffnessNl) != 0.0 || type.param(kStiffnessNl).free);
+          const bool linearizable = cubic && options.linearize_rest_length &&
+                                    type.param(kStiffness).free && type.param(kStiffnessNl).free &&
+                                    type.param(kRestLength).has_value;
+          if (cubic && !linearizable) {
             out.reason = "'" + r.name + "' enters non-linearly (the type has a cubic stiffness_nl)";
             return out;
           }
           linear = true;  // its column is decided below, once the stiffness' column is known
         } else if (r.param == kDamping) {
           tc.damping = static_cast<int>(columns.size());
+          columns.push_back({static_cast<int>(k), Role::kDirect});
+          linear = true;
+        } else if (r.param == kStiffnessNl && spring &&
+                   (!type.param(kRestLength).free || options.linearize_rest_length)) {
+          tc.stiffness_nl = static_cast<int>(columns.size());  // k_nl (l - L)^3, L known (or L0)
+          columns.push_back({static_cast<int>(k), Role::kDirect});
+          linear = true;
+        } else if (r.param == kDampingNl && spring) {
+          tc.damping_nl = static_cast<int>(columns.size());    // c_nl s |s|
           columns.push_back({static_cast<int>(k), Role::kDirect});
           linear = true;
         }
@@ -186,7 +207,10 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
     const int rest = freeIndex(static_cast<int>(t), rest_param);
     if (rest < 0) continue;
     TypeColumns& tc = types[t];
-    if (tc.k >= 0) {
+    if (tc.stiffness_nl >= 0) {  // linearised (checked above)
+      tc.rest_step = static_cast<int>(columns.size());
+      columns.push_back({rest, Role::kLinearized, -1, type.param(kRestLength).value});
+    } else if (tc.k >= 0) {
       tc.product = static_cast<int>(columns.size());
       columns.push_back({rest, Role::kProduct, tc.k});
     } else {
@@ -272,7 +296,11 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
           add(a, column, f * u);
           add(c, column, -f * u);
         };
-        if (tc.product >= 0) {          // f = k l - (k L)
+        if (tc.rest_step >= 0) {        // f = k (l - L0) + k_nl (l - L0)^3 - (k0 + 3 k_nl0 (l - L0)^2) (L - L0)
+          const double e = l - rest;
+          pair(tc.rest_step, -(k + 3.0 * type.value(kStiffnessNl) * e * e));
+          pair(tc.k, e);
+        } else if (tc.product >= 0) {   // f = k l - (k L)
           pair(tc.k, l);
           pair(tc.product, -1.0);
         } else if (tc.k >= 0) {         // f = k (l - L), L known
@@ -281,6 +309,11 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
           pair(tc.rest, -k);
         }
         pair(tc.damping, s);
+        if (tc.stiffness_nl >= 0) {
+          const double e = l - rest;
+          pair(tc.stiffness_nl, e * e * e);
+        }
+        pair(tc.damping_nl, s * std::fabs(s));
         break;
       }
       case BondKind::kFlexion: {
@@ -355,6 +388,7 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
   for (const Column& c : columns) {
     out.column_param.push_back(c.param);
     out.column_partner.push_back(c.role == Role::kProduct ? c.partner : -1);
+    out.column_offset.push_back(c.offset);
   }
   return out;
 }
@@ -385,14 +419,15 @@ EquationErrorResult solveEquationError(const Model& model, const Trajectory& tra
   out.residual_rms_m = std::sqrt(residual2 / out.rows);
   for (size_t j = 0; j < nc; ++j) {
     if (!(ata(j, j) > 0.0)) continue;
-    double value = theta[j];
+    double value = theta[j] + system.column_offset[j];
     if (system.column_partner[j] >= 0) value = theta[j] / theta[system.column_partner[j]];
     out.values[system.column_param[j]] = value;
   }
-  // Non-physical values (a negative stiffness, damping or length) are not a start.
+  // Non-physical values (a negative stiffness, damping or length) are not a start; a negative
+  // cubic stiffness is (a softening spring).
   for (size_t k = 0; k < refs.size(); ++k) {
     const ParamRef& r = refs[k];
-    if (r.bond_type >= 0 && r.param != kRestAngle && !(out.values[k] > 0.0))
+    if (r.bond_type >= 0 && r.param != kRestAngle && r.param != kStiffnessNl && !(out.values[k] > 0.0))
       out.values[k] = std::numeric_limits<double>::quiet_NaN();
     if (!std::isfinite(out.values[k])) out.values[k] = std::numeric_limits<double>::quiet_NaN();
   }

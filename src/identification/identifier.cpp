@@ -135,10 +135,29 @@ std::vector<std::vector<double>> equationErrorSeeds(const Model& model, const Tr
                                                     ParameterSpace* space,
                                                     std::vector<std::string>* notes) {
   std::vector<std::vector<double>> seeds;
+  // Types whose rest length enters non-linearly (free k, L, k_nl with values): Gauss-Newton steps
+  // of the linearised equation error from the model's values.
+  bool linearized = false;
+  for (const BondType& t : model.bond_types)
+    linearized = linearized || (t.kind == BondKind::kSpring && t.param(kStiffness).free &&
+                                t.param(kRestLength).free && t.param(kRestLength).has_value &&
+                                t.param(kStiffnessNl).free);
+  const std::vector<ParamRef> refs = freeParameters(model);
   for (int half_width : {0, 3}) {
     EquationErrorOptions o;
     o.smoothing_half_width = half_width;
-    const EquationErrorResult ee = solveEquationError(model, trajectory, o);
+    o.linearize_rest_length = linearized;
+    EquationErrorResult ee = solveEquationError(model, trajectory, o);
+    if (!ee.applicable) break;
+    Model step = model;
+    for (int iteration = 1; linearized && iteration < 10; ++iteration) {
+      bool finite = true;
+      for (double v : ee.values) finite = finite && std::isfinite(v);
+      if (!finite) break;
+      setValues(step, refs, ee.values);
+      ee = solveEquationError(step, trajectory, o);
+      if (!ee.applicable) break;
+    }
     if (!ee.applicable) break;
     std::vector<double> genes(space->size());
     for (size_t k = 0; k < space->size(); ++k) {

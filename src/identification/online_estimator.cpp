@@ -31,10 +31,11 @@ namespace {
 /// window: see addFrame.
 constexpr double kClockJumpS = 1.0;
 
-void checkModel(const Model& model) {
+void checkModel(const Model& model, bool allow_no_free_parameter) {
   const std::string bad = validateModel(model);
   if (!bad.empty()) throw InputError("model: " + bad);
-  if (freeParameters(model).empty()) throw InputError("model: no free parameter to identify");
+  if (!allow_no_free_parameter && freeParameters(model).empty())
+    throw InputError("model: no free parameter to identify");
 }
 }  // namespace
 
@@ -125,7 +126,7 @@ OnlineEstimator::OnlineEstimator(const Model& model, const OnlineEstimatorOption
     : model_(model), options_(options) {
   const std::string bad = validateOptions(options);
   if (!bad.empty()) throw InputError(bad);
-  checkModel(model);
+  checkModel(model, options_.wait_for_structure);
   for (const Particle& p : model.particles) names_.push_back(p.name);
 }
 
@@ -259,6 +260,7 @@ bool OnlineEstimator::update() {
     output_error_ = OutputErrorResult();
   }
   es_version_ = version;
+  if (freeParameters(model).empty()) return false;  // waiting for a structure (replaceModel)
   // Live streams carry their own clock: the model's rate wins only when it states one.
   if (!(model.frame_rate_hz > 0.0)) model.frame_rate_hz = window_data.frame_rate_hz;
   auto cost = std::make_shared<ShortTermCost>(model, window_data);
@@ -420,7 +422,7 @@ void OnlineEstimator::reset(bool clear_window) {
 }
 
 void OnlineEstimator::replaceModel(const Model& model) {
-  checkModel(model);
+  checkModel(model, options_.wait_for_structure);
   std::vector<std::string> names;
   for (const Particle& p : model.particles) names.push_back(p.name);
   std::lock_guard<std::mutex> lock(model_mutex_);

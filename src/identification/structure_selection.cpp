@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -12,6 +13,7 @@
 #include <utility>
 
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/forces.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/equation_error.h"
 #include "motion_model_estimation/identification/prediction_error.h"
@@ -21,6 +23,7 @@ namespace mme {
 namespace {
 
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+constexpr double kPi = 3.14159265358979323846;
 constexpr int kHorizons[3] = {1, 5, 10};
 constexpr int kMaxPasses = 12;  ///< solves per level (non-physical drops, screening rounds)
 
@@ -121,20 +124,126 @@ int addCandidateBonds(Model* model, const std::vector<std::pair<int, int>>& pair
   return first;
 }
 
+/// Near-collinear triples (a, v, c) for flexion: a and c among the `nearest` candidate partners
+/// of the vertex v, with a mean angle at v of at least `min_angle_rad` (a chain's bend: springs
+/// alone resist it only at second order, unlike a triangle's), the straightest first, at most
+/// `most`.
+std::vector<std::array<int, 3>> candidateTriples(const Model& model, const Trajectory& data,
+                                                 const std::vector<std::pair<int, int>>& pairs,
+                                                 int nearest, double min_angle_rad, int most) {
+  const int n = static_cast<int>(model.particles.size());
+  // Each vertex's nearest candidate partners (mean distance): a chain's neighbours.
+  const auto meanDistance = [&](int a, int b) {
+    double sum = 0.0;
+    int count = 0;
+    for (int t = 0; t < data.numFrames(); ++t)
+      if (!data.isOccluded(t, a) && !data.isOccluded(t, b)) {
+        sum += (data.position(t, a) - data.position(t, b)).norm();
+        ++count;
+      }
+    return count > 0 ? sum / count : std::numeric_limits<double>::infinity();
+  };
+  std::vector<std::vector<std::pair<double, int>>> by_distance(n);
+  for (const auto& p : pairs) {
+    const double d = meanDistance(p.first, p.second);
+    by_distance[p.first].push_back({d, p.second});
+    by_distance[p.second].push_back({d, p.first});
+  }
+  std::vector<std::vector<int>> partners(n);
+  for (int v = 0; v < n; ++v) {
+    std::sort(by_distance[v].begin(), by_distance[v].end());
+    for (int k = 0; k < nearest && k < static_cast<int>(by_distance[v].size()); ++k)
+      partners[v].push_back(by_distance[v][k].second);
+  }
+  std::vector<std::pair<double, std::array<int, 3>>> found;
+  for (int v = 0; v < n; ++v) {
+    if (model.particles[v].fixed) continue;
+    const std::vector<int>& near = partners[v];
+    for (size_t i = 0; i < near.size(); ++i)
+      for (size_t j = i + 1; j < near.size(); ++j) {
+        const int a = std::min(near[i], near[j]), c = std::max(near[i], near[j]);
+        double sum = 0.0;
+        int count = 0;
+        for (int t = 0; t < data.numFrames(); ++t) {
+          if (data.isOccluded(t, a) || data.isOccluded(t, v) || data.isOccluded(t, c)) continue;
+          sum += flexionAngle(data.position(t, a), data.position(t, v), data.position(t, c));
+          ++count;
+        }
+        if (count < 3 || sum / count < min_angle_rad) continue;
+        found.push_back({-sum / count, {{a, v, c}}});
+      }
+  }
+  std::sort(found.begin(), found.end());
+  if (static_cast<int>(found.size()) > most) found.resize(most);
+  std::vector<std::array<int, 3>> triples;
+  for (const auto& f : found) triples.push_back(f.second);
+  std::sort(triples.begin(), triples.end());
+  return triples;
+}
+
+/// A flexion bond of its own type per triple (stiffness, rest angle at the mean angle, and a
+/// damping when `dampers`).
+void addCandidateFlexions(Model* model, const std::vector<std::array<int, 3>>& triples,
+                          const Trajectory& data, bool dampers) {
+  for (const auto& tr : triples) {
+    BondType type;
+    type.name = "f_" + model->particles[tr[0]].name + "_" + model->particles[tr[1]].name + "_" +
+                model->particles[tr[2]].name;
+    type.kind = BondKind::kFlexion;
+    double angle = 0.0;
+    int count = 0;
+    for (int t = 0; t < data.numFrames(); ++t)
+      if (!data.isOccluded(t, tr[0]) && !data.isOccluded(t, tr[1]) && !data.isOccluded(t, tr[2])) {
+        angle += flexionAngle(data.position(t, tr[0]), data.position(t, tr[1]), data.position(t, tr[2]));
+        ++count;
+      }
+    type.param(kStiffness) = freeParam(1e-3);
+    type.param(kRestAngle) = freeParam(count > 0 ? angle / count : 3.0);
+    if (dampers) type.param(kDamping) = freeParam(1e-4);
+    Bond bond;
+    bond.type = static_cast<int>(model->bond_types.size());
+    bond.particles = {{tr[0], tr[1], tr[2]}};
+    model->bond_types.push_back(type);
+    model->bonds.push_back(bond);
+  }
+}
+
+/// A viscosity (drag on the particle's velocity) of its own type per free particle.
+void addCandidateViscosities(Model* model) {
+  for (size_t i = 0; i < model->particles.size(); ++i) {
+    if (model->particles[i].fixed) continue;
+    BondType type;
+    type.name = "v_" + model->particles[i].name;
+    type.kind = BondKind::kViscosity;
+    type.param(kViscosity) = freeParam(0.01);
+    Bond bond;
+    bond.type = static_cast<int>(model->bond_types.size());
+    bond.particles = {{static_cast<int>(i), -1, -1}};
+    model->bond_types.push_back(type);
+    model->bonds.push_back(bond);
+  }
+}
+
 /// Solves the columns in `active` of the normal equations (scaled, rank-revealing); the others 0.
 Eigen::VectorXd solveActive(const EquationErrorSystem& sys, const std::vector<int>& active,
                             Eigen::MatrixXd* inverse_scaled, Eigen::VectorXd* scale_out) {
   const int m = static_cast<int>(active.size());
   Eigen::MatrixXd a(m, m);
   Eigen::VectorXd b(m), scale(m);
+  // Columns next to nothing (1e-30 of the largest) count as absent: their scaling would
+  // overflow the products below.
+  double largest = 0.0;
+  for (int i = 0; i < m; ++i) largest = std::max(largest, sys.ata(active[i], active[i]));
   for (int i = 0; i < m; ++i) {
     const double d = sys.ata(active[i], active[i]);
-    scale[i] = d > 0.0 ? 1.0 / std::sqrt(d) : 0.0;
+    scale[i] = d > 1e-30 * largest ? 1.0 / std::sqrt(d) : 0.0;
   }
   for (int i = 0; i < m; ++i) {
     b[i] = scale[i] * sys.atb[active[i]];
     for (int j = 0; j < m; ++j) a(i, j) = scale[i] * sys.ata(active[i], active[j]) * scale[j];
   }
+  if (!a.allFinite() || !b.allFinite())
+    throw InputError("structure selection: the equation error's normal equations are not finite");
   Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(a);
   cod.setThreshold(1e-12);
   Eigen::VectorXd theta = scale.asDiagonal() * cod.solve(b);
@@ -149,12 +258,13 @@ double rss(const EquationErrorSystem& sys, const Eigen::VectorXd& theta) {
   return std::max(0.0, sys.btb - 2.0 * theta.dot(sys.atb) + theta.dot(sys.ata * theta));
 }
 
-/// A removable unit: a bond's spring (with its damper), a bond's damper alone, or gravity.
+/// A removable unit: a bond (its spring, flexion or drag, with its children), one of a bond's
+/// optional terms alone (damping, cubic stiffness, quadratic damping), or gravity.
 struct Group {
   std::vector<int> columns;
   int bond_type = -1;     ///< -1: gravity
-  bool damper = false;
-  int child = -1;         ///< the damper group that must go with this spring
+  int term = -1;          ///< an optional term's ParamId (kDamping, ...); -1: the bond itself
+  std::vector<int> children;  ///< the optional terms' groups, which go with the bond
   bool active = true;
 };
 
@@ -204,9 +314,9 @@ Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
   const auto unitOf = [&](int g) {
     std::vector<int> unit;
     for (int c : groups[g].columns) unit.push_back(position.at(c));
-    const int child = groups[g].child;
-    if (child >= 0 && groups[child].active)
-      for (int c : groups[child].columns) unit.push_back(position.at(c));
+    for (int child : groups[g].children)
+      if (groups[child].active)
+        for (int c : groups[child].columns) unit.push_back(position.at(c));
     return unit;
   };
   // The residual's rise when the columns at `r` go: theta_R^T inv_RR^-1 theta_R.
@@ -292,7 +402,7 @@ Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
     }
     for (int g : batch) {
       groups[g].active = false;
-      if (groups[g].child >= 0) groups[groups[g].child].active = false;
+      for (int child : groups[g].children) groups[child].active = false;
     }
     drop(r);
     removed += static_cast<int>(batch.size());
@@ -319,15 +429,22 @@ double bic(double rss_m2, size_t rows, int parameters, double sigma2_floor) {
   return n * std::log(r / n) + parameters * std::log(n);
 }
 
+/// A kept bond's values: spring (k, L, c, k_nl, c_nl); flexion (k, theta0, c, 0, 0); viscosity
+/// (c_v, 0, 0, 0, 0).
+using BondValues = Eigen::Matrix<double, 5, 1>;
+/// Which optional terms a kept bond has (bits): damping, cubic stiffness, quadratic damping.
+enum TermBits : uint8_t { kHasDamping = 1, kHasStiffnessNl = 2, kHasDampingNl = 4 };
+
 /// The model a selection describes: the base model's own bonds, then one type per kept bond
-/// with its solved values (k, L, c); gravity off when its unit was removed.
+/// with its solved values; gravity off when its unit was removed.
 struct Solved {
   Model model;
   std::vector<int> kept_types;      ///< the candidate types kept (indices into the candidate model)
-  std::vector<Eigen::Vector3d> value, sigma;  ///< per kept type: (k, L, c) and their 1-sigma
-  std::vector<uint8_t> damped;      ///< per kept type: it has a damper
-  std::vector<int> bad_springs;     ///< kept types with k <= 0 or L <= 0
-  std::vector<int> bad_dampers;     ///< kept types with a damping <= 0
+  std::vector<BondValues> value, sigma;  ///< per kept type: its values and their 1-sigma
+  std::vector<uint8_t> terms;       ///< per kept type: its optional terms (TermBits)
+  std::vector<int> bad_bonds;       ///< kept types with k <= 0, L <= 0, theta0 outside (0, pi] or c_v <= 0
+  /// Optional terms that came out non-physical (a damping <= 0): (type, ParamId).
+  std::vector<std::pair<int, int>> bad_terms;
 };
 
 Solved describe(const Model& candidate, const EquationErrorSystem& sys, const Selection& sel,
@@ -353,7 +470,7 @@ Solved describe(const Model& candidate, const EquationErrorSystem& sys, const Se
   // Every solved value (base types, candidates, gravity) into the model.
   for (int j : sel.active_columns) {
     const int partner = sys.column_partner[j];
-    const double value = partner >= 0 ? sel.theta[j] / sel.theta[partner] : sel.theta[j];
+    const double value = partner >= 0 ? sel.theta[j] / sel.theta[partner] : sel.theta[j] + sys.column_offset[j];
     if (std::isfinite(value)) setParam(model, refs[sys.column_param[j]], value);
   }
   // Base types stay; a candidate type stays when its spring does.
@@ -370,37 +487,66 @@ Solved describe(const Model& candidate, const EquationErrorSystem& sys, const Se
         }
       continue;
     }
-    if (g.damper) {
-      if (!g.active) model.bond_types[g.bond_type].param(kDamping) = Param();
+    if (g.term >= 0) {
+      if (!g.active) model.bond_types[g.bond_type].param(static_cast<ParamId>(g.term)) = Param();
       continue;
     }
     if (!g.active) continue;
     const int t = g.bond_type;
     keep_type[t] = 1;
-    const int ck = column_of.at({t, kStiffness}), ckl = column_of.at({t, -kRestLength - 1});
-    const double k = sel.theta[ck], kl = sel.theta[ckl];
-    const double length = kl / k;
-    Eigen::Vector3d v(k, length, 0.0), s(0.0, 0.0, 0.0);
-    s[0] = std::sqrt(std::max(0.0, cov(ck, ck)));
-    const double dl_dkl = 1.0 / k, dl_dk = -kl / (k * k);
-    s[1] = std::sqrt(std::max(0.0, dl_dkl * dl_dkl * cov(ckl, ckl) + dl_dk * dl_dk * cov(ck, ck) +
-                                       2.0 * dl_dkl * dl_dk * cov(ck, ckl)));
-    const auto damper = column_of.find({t, kDamping});
-    const bool damped = dampers && damper != column_of.end() && position.count(damper->second);
-    if (damped) {
-      v[2] = sel.theta[damper->second];
-      s[2] = std::sqrt(std::max(0.0, cov(damper->second, damper->second)));
-    }
-    if (!(k > 0.0) || !(length > 0.0)) out.bad_springs.push_back(t);
-    else if (damped && !(v[2] > 0.0)) out.bad_dampers.push_back(t);
     BondType& type = model.bond_types[t];
-    type.param(kStiffness).value = k;
-    type.param(kRestLength).value = length;
-    if (damped) type.param(kDamping).value = v[2];
+    BondValues v = BondValues::Zero(), s = BondValues::Zero();
+    uint8_t terms = 0;
+    if (type.kind == BondKind::kViscosity) {
+      const int cv = column_of.at({t, kViscosity});
+      v[0] = sel.theta[cv];
+      s[0] = std::sqrt(std::max(0.0, cov(cv, cv)));
+      if (!(v[0] > 0.0)) out.bad_bonds.push_back(t);
+      else type.param(kViscosity).value = v[0];
+    } else {
+      // A spring (k, L = kL / k, c) or a flexion (k, theta0 = k theta0 / k, c): the same algebra;
+      // a rest length that is not free (the non-linear level) is known.
+      const bool spring = type.kind == BondKind::kSpring;
+      const ParamId rest_id = spring ? kRestLength : kRestAngle;
+      const int ck = column_of.at({t, kStiffness});
+      const double k = sel.theta[ck];
+      s[0] = std::sqrt(std::max(0.0, cov(ck, ck)));
+      double rest = type.param(rest_id).value;  // known, or set above (a linearised column)
+      const auto linearized = column_of.find({t, rest_id});
+      if (linearized != column_of.end() && position.count(linearized->second))
+        s[1] = std::sqrt(std::max(0.0, cov(linearized->second, linearized->second)));
+      const auto product = column_of.find({t, -kRestLength - 1});
+      if (product != column_of.end()) {
+        const int ckl = product->second;
+        const double kl = sel.theta[ckl];
+        rest = kl / k;
+        const double dl_dkl = 1.0 / k, dl_dk = -kl / (k * k);
+        s[1] = std::sqrt(std::max(0.0, dl_dkl * dl_dkl * cov(ckl, ckl) + dl_dk * dl_dk * cov(ck, ck) +
+                                           2.0 * dl_dkl * dl_dk * cov(ck, ckl)));
+      }
+      v[0] = k;
+      v[1] = rest;
+      // The optional terms still active.
+      const ParamId optional[3] = {kDamping, kStiffnessNl, kDampingNl};
+      for (int o = 0; o < 3; ++o) {
+        const auto column = column_of.find({t, optional[o]});
+        if (column == column_of.end() || !position.count(column->second)) continue;
+        if (optional[o] == kDamping && !dampers) continue;
+        terms |= static_cast<uint8_t>(1u << o);
+        v[2 + o] = sel.theta[column->second];
+        s[2 + o] = std::sqrt(std::max(0.0, cov(column->second, column->second)));
+        type.param(optional[o]).value = v[2 + o];
+        if (optional[o] != kStiffnessNl && !(v[2 + o] > 0.0)) out.bad_terms.push_back({t, optional[o]});
+      }
+      const bool rest_ok = spring ? rest > 0.0 : (rest > 0.0 && rest <= kPi);
+      if (!(k > 0.0) || !rest_ok) out.bad_bonds.push_back(t);
+      type.param(kStiffness).value = k;
+      type.param(rest_id).value = rest;
+    }
     out.kept_types.push_back(t);
     out.value.push_back(v);
     out.sigma.push_back(s);
-    out.damped.push_back(damped ? 1 : 0);
+    out.terms.push_back(terms);
   }
   // Drop the removed candidate types and their bonds (base types stay, indices kept in order).
   Model pruned = model;
@@ -422,8 +568,9 @@ Solved describe(const Model& candidate, const EquationErrorSystem& sys, const Se
   return out;
 }
 
-/// Bonds whose (k, L, c) agree within `sigmas` standard deviations share a type (greedy, in
-/// order of stiffness). Returns the typed model (candidate types renamed s00, s01, ...).
+/// Bonds of one kind whose values (k, L, c; k, theta0, c; c_v) agree within `sigmas` standard
+/// deviations share a type (greedy, in order of stiffness). Returns the typed model (candidate
+/// types renamed s00, s01, ... for springs, f00, ... for flexion, v00, ... for viscosity).
 Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, int* types_out) {
   const Model& m = solved.model;
   const int kept = static_cast<int>(solved.kept_types.size());
@@ -432,34 +579,40 @@ Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, i
   std::sort(order.begin(), order.end(),
             [&](int a, int b) { return solved.value[a][0] < solved.value[b][0]; });
   struct Cluster {
-    Eigen::Vector3d sum_w_v = Eigen::Vector3d::Zero(), sum_w = Eigen::Vector3d::Zero();
-    uint8_t damped = 0;
+    BondValues sum_w_v = BondValues::Zero(), sum_w = BondValues::Zero();
+    uint8_t terms = 0;
+    BondKind kind = BondKind::kSpring;
     int first_member = -1;
-    Eigen::Vector3d mean() const { return sum_w_v.cwiseQuotient(sum_w); }
-    Eigen::Vector3d sigma() const { return sum_w.cwiseInverse().cwiseSqrt(); }
+    BondValues mean() const { return sum_w_v.cwiseQuotient(sum_w); }
+    BondValues sigma() const { return sum_w.cwiseInverse().cwiseSqrt(); }
   };
   std::vector<Cluster> clusters;
   std::vector<int> cluster_of(kept, -1);
   for (int idx : order) {
-    const Eigen::Vector3d& v = solved.value[idx];
-    Eigen::Vector3d s = solved.sigma[idx];
+    const BondValues& v = solved.value[idx];
+    BondValues s = solved.sigma[idx];
     // Round-off of the solve: values within 1e-6 (relative) are equal.
-    for (int d = 0; d < 3; ++d) s[d] = std::max(s[d], 1e-6 * std::max(std::fabs(v[d]), 1e-12));
+    for (int d = 0; d < 5; ++d) s[d] = std::max(s[d], 1e-6 * std::max(std::fabs(v[d]), 1e-12));
     int join = -1;
     for (size_t c = 0; c < clusters.size() && join < 0; ++c) {
-      const Eigen::Vector3d mu = clusters[c].mean(), sc = clusters[c].sigma();
-      bool agree = clusters[c].damped == solved.damped[idx];  // a damper or none, alike
-      for (int d = 0; d < (solved.damped[idx] ? 3 : 2) && agree; ++d)
-        agree = std::fabs(v[d] - mu[d]) <= sigmas * std::sqrt(s[d] * s[d] + sc[d] * sc[d]);
+      const BondValues mu = clusters[c].mean(), sc = clusters[c].sigma();
+      const BondKind kind = m.bond_types[first_candidate_type + idx].kind;
+      // One kind with the same optional terms; the values present agree.
+      const uint8_t terms = solved.terms[idx];
+      bool agree = clusters[c].kind == kind && clusters[c].terms == terms;
+      for (int d = 0; d < 5 && agree; ++d)
+        if (d < 2 || (terms & (1u << (d - 2))))
+          agree = std::fabs(v[d] - mu[d]) <= sigmas * std::sqrt(s[d] * s[d] + sc[d] * sc[d]);
       if (agree) join = static_cast<int>(c);
     }
     if (join < 0) {
       join = static_cast<int>(clusters.size());
       clusters.emplace_back();
-      clusters.back().damped = solved.damped[idx];
+      clusters.back().terms = solved.terms[idx];
+      clusters.back().kind = m.bond_types[first_candidate_type + idx].kind;
       clusters.back().first_member = idx;
     }
-    const Eigen::Vector3d w = s.cwiseProduct(s).cwiseInverse();
+    const BondValues w = s.cwiseProduct(s).cwiseInverse();
     clusters[join].sum_w_v += w.cwiseProduct(v);
     clusters[join].sum_w += w;
     cluster_of[idx] = join;
@@ -468,15 +621,39 @@ Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, i
   Model typed = m;
   typed.bond_types.resize(first_candidate_type);
   char name[32];
+  int of_kind[3] = {0, 0, 0};  // numbering per kind: s00.., f00.., v00..
   for (size_t c = 0; c < clusters.size(); ++c) {
     // The layout (which parameters are free) of the cluster's first member.
     BondType type = m.bond_types[first_candidate_type + clusters[c].first_member];
-    std::snprintf(name, sizeof(name), "s%02d", static_cast<int>(c));
+    const BondValues mu = clusters[c].mean();
+    const char* prefix = "s";
+    int* counter = &of_kind[0];
+    switch (type.kind) {
+      case BondKind::kSpring:
+      case BondKind::kFlexion: {
+        const bool spring = type.kind == BondKind::kSpring;
+        if (!spring) {
+          prefix = "f";
+          counter = &of_kind[1];
+        }
+        type.param(kStiffness).value = mu[0];
+        type.param(spring ? kRestLength : kRestAngle).value = mu[1];
+        const ParamId optional[3] = {kDamping, kStiffnessNl, kDampingNl};
+        for (int o = 0; o < 3; ++o)
+          if (clusters[c].terms & (1u << o)) type.param(optional[o]).value = mu[2 + o];
+        break;
+      }
+      case BondKind::kViscosity:
+        prefix = "v";
+        counter = &of_kind[2];
+        type.param(kViscosity).value = mu[0];
+        break;
+      case BondKind::kMuscle:  // never a candidate: candidates are springs, flexions, drags
+      case BondKind::kFloor:
+        break;
+    }
+    std::snprintf(name, sizeof(name), "%s%02d", prefix, (*counter)++);
     type.name = name;
-    const Eigen::Vector3d mu = clusters[c].mean();
-    type.param(kStiffness).value = mu[0];
-    type.param(kRestLength).value = mu[1];
-    if (clusters[c].damped) type.param(kDamping).value = mu[2];
     typed.bond_types.push_back(type);
   }
   // The kept candidate types of `m` follow the base types in kept order.
@@ -485,6 +662,26 @@ Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, i
       b.type = first_candidate_type + cluster_of[b.type - first_candidate_type];
   *types_out = static_cast<int>(clusters.size());
   return typed;
+}
+
+/// What a level kept, before typing: per candidate bond its kind, particles and which of its
+/// parameters are present (equal strings: the same structure).
+std::string structureSignature(const Model& model, int first_candidate_type) {
+  std::vector<std::string> items;
+  for (const Bond& b : model.bonds) {
+    if (b.type < first_candidate_type) continue;
+    const BondType& type = model.bond_types[b.type];
+    std::string item = kindName(type.kind);
+    for (int k = 0; k < kindArity(type.kind); ++k) item += " " + model.particles[b.particles[k]].name;
+    for (ParamId id : paramsOfKind(type.kind))
+      if (type.param(id).present) item += std::string(" ") + paramKey(id);
+    items.push_back(item);
+  }
+  std::sort(items.begin(), items.end());
+  std::string out;
+  for (const std::string& item : items) out += item + ";";
+  const bool gravity = model.gravity_mps2[0].free || model.gravity_mps2[1].free || model.gravity_mps2[2].free;
+  return out + (gravity ? "gravity" : "");
 }
 
 void heldOutErrors(const Model& model, const Trajectory& held, StructureCandidate* c) {
@@ -582,8 +779,91 @@ std::vector<std::pair<int, int>> missingPairs(const Model& model, const Trajecto
 
 }  // namespace
 
-StructureResult selectStructure(const Model& model, const Trajectory& data,
+/// The held-out 10-frame error decides; within 2 % of the best, the criterion (then fewer
+/// parameters) does.
+int bestCandidate(const std::vector<StructureCandidate>& candidates) {
+  double best_err = std::numeric_limits<double>::infinity();
+  for (const StructureCandidate& c : candidates)
+    if (std::isfinite(c.held_out_rms_m[2])) best_err = std::min(best_err, c.held_out_rms_m[2]);
+  int chosen = -1;
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    const StructureCandidate& c = candidates[i];
+    const bool near = !std::isfinite(best_err) || (std::isfinite(c.held_out_rms_m[2]) &&
+                                                   c.held_out_rms_m[2] <= 1.02 * best_err);
+    if (!near) continue;
+    if (chosen < 0 || c.parameters < candidates[chosen].parameters ||
+        (c.parameters == candidates[chosen].parameters && c.bic < candidates[chosen].bic))
+      chosen = static_cast<int>(i);
+  }
+  return chosen;
+}
+
+/// The non-linear level's candidate model: `linear` (the best linear level's kept bonds, one type
+/// each) with the values of its least-squares equation-error fit, and a free cubic stiffness on
+/// every candidate spring (a quadratic damping too where it has a damper), at 0.
+Model nonlinearCandidates(Model linear, const Trajectory& fit, const EquationErrorOptions& ee,
+                          int first_candidate_type) {
+  const EquationErrorResult start = solveEquationError(linear, fit, ee);
+  const std::vector<ParamRef> refs = freeParameters(linear);
+  if (start.applicable)
+    for (size_t k = 0; k < refs.size(); ++k)
+      if (std::isfinite(start.values[k])) setParam(linear, refs[k], start.values[k]);
+  for (size_t t = first_candidate_type; t < linear.bond_types.size(); ++t) {
+    BondType& type = linear.bond_types[t];
+    if (type.kind != BondKind::kSpring || !type.param(kStiffness).free) continue;
+    type.param(kStiffnessNl) = freeParam(0.0);
+    if (type.param(kDamping).free) type.param(kDampingNl) = freeParam(0.0);
+  }
+  return linear;
+}
+
+/// The least-squares solution of every column of `model`'s linearised equation error (rest
+/// lengths beside cubic terms, equation_error.h), iterated from the model's values while the
+/// linearised residual falls (Gauss-Newton; a step that raises it is undone); the values are
+/// written into the model.
+void convergeLinearized(Model* model, const Trajectory& fit, const EquationErrorOptions& ee) {
+  const std::vector<ParamRef> refs = freeParameters(*model);
+  double best_rss = std::numeric_limits<double>::infinity();
+  Model before_step = *model;
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    const EquationErrorSystem sys = buildEquationErrorSystem(*model, fit, ee);
+    const bool finite = sys.reason.empty() && sys.ata.allFinite() && sys.atb.allFinite();
+    std::vector<int> all;
+    for (size_t j = 0; finite && j < sys.column_param.size(); ++j)
+      if (sys.ata(j, j) > 0.0) all.push_back(static_cast<int>(j));
+    const Eigen::VectorXd theta = finite ? solveActive(sys, all, nullptr, nullptr) : Eigen::VectorXd();
+    const double r = finite ? rss(sys, theta) : kNan;
+    if (!finite || !theta.allFinite() || !(r < best_rss * (1.0 - 1e-6))) {
+      // No progress from this point: back to the one it was reached from (iteration 0: the start).
+      if (iteration > 0) *model = before_step;
+      return;
+    }
+    best_rss = r;
+    before_step = *model;
+    for (int j : all) {
+      const int partner = sys.column_partner[j];
+      double value = partner >= 0 ? theta[j] / theta[partner] : theta[j] + sys.column_offset[j];
+      if (!std::isfinite(value)) continue;
+      const ParamRef& r_ref = refs[sys.column_param[j]];
+      if (r_ref.bond_type >= 0 && r_ref.param == kRestLength && sys.column_offset[j] != 0.0) {
+        // A step of at most 20 % of the rest length: a bond with next to no stiffness (a
+        // candidate the data do not want) has next to no say on its length.
+        const double before = sys.column_offset[j];
+        value = std::min(std::max(value, 0.8 * before), 1.2 * before);
+      }
+      setParam(*model, r_ref, value);
+    }
+    if (r <= 1e-30 * std::max(sys.btb, 1e-300)) return;  // exact
+  }
+}
+
+StructureResult selectStructure(const Model& given, const Trajectory& data,
                                 const StructureOptions& options) {
+  // The data's rate when the model states none (a live window, a model of particles alone).
+  Model model = given;
+  if (!(model.frame_rate_hz > 0.0)) model.frame_rate_hz = data.frame_rate_hz;
+  if (!(model.frame_rate_hz > 0.0))
+    throw InputError("structure selection: no frame rate (neither the model nor the data state one)");
   const auto say = [&](const std::string& line) {
     if (options.progress) options.progress(line);
   };
@@ -646,19 +926,92 @@ StructureResult selectStructure(const Model& model, const Trajectory& data,
   }
 
   const int first_candidate_type = static_cast<int>(model.bond_types.size());
+  // Flexion candidates on near-collinear triples of the candidate pairs.
+  std::vector<std::array<int, 3>> triples;
+  if (options.try_flexion)
+    triples = candidateTriples(model, fit, pairs, 4, options.flexion_min_angle_rad,
+                               4 * static_cast<int>(model.particles.size()));
+  // The levels, in rising complexity; each holds every candidate component of the ones before.
+  struct Level {
+    std::string name;
+    bool dampers, flexion, viscosity;
+    int nonlinear_on = -1;  ///< >= 0: the non-linear terms on that level's kept bonds
+  };
+  std::vector<Level> levels = {{"springs", false, false, false}};
+  if (options.try_dampers) levels.push_back({"springs+dampers", true, false, false});
+  if (!triples.empty()) levels.push_back({levels.back().name + "+flexion", options.try_dampers, true, false});
+  if (options.try_viscosity)
+    levels.push_back({levels.back().name + "+viscosity", options.try_dampers, !triples.empty(), true});
+  say("structure: " + std::to_string(triples.size()) + " flexion candidate(s) on near-collinear triples; " +
+      std::to_string(levels.size()) + " level(s) to try");
   std::vector<StructureCandidate> candidates;
-  for (int level = 0; level < (options.try_dampers ? 2 : 1); ++level) {
-    const bool dampers = level == 1;
+  // A level's typed model refitted by the full identification on the fitted frames (rest
+  // lengths of the non-linear level free again: the seeds are Gauss-Newton steps of the
+  // linearised equation error from the values) and judged on the held-out frames.
+  const auto refitAndJudge = [&](StructureCandidate* cand, bool nonlinear, int first_type) {
+    if (nonlinear)
+      for (size_t t = first_type; t < cand->model.bond_types.size(); ++t) {
+        BondType& type = cand->model.bond_types[t];
+        if (type.kind == BondKind::kSpring && type.param(kStiffness).free) type.param(kRestLength).free = true;
+      }
+    if (options.refit) {
+      IdentifyOptions io = options.identify;
+      io.cost = CostChoice::kShortTerm;  // ranking only: the final fit is the caller's
+      io.generations = std::min(io.generations, options.refit_generations);
+      io.max_wall_time_s = io.max_wall_time_s > 0.0 ? std::min(io.max_wall_time_s, options.refit_max_s)
+                                                    : options.refit_max_s;
+      io.estimate_std = false;
+      const IdentifyResult r = identifyModel(cand->model, fit, io);
+      cand->model = r.model;
+      cand->refit_cost_m2 = r.global_cost;
+    }
+    cand->parameters = static_cast<int>(freeParameters(cand->model).size());
+    heldOutErrors(cand->model, held, cand);
+    char line[256];
+    std::snprintf(line, sizeof(line),
+                  "structure: %s: %d bonds, %d types, %d parameters; held-out RMS 1/5/10 frames "
+                  "ahead %.3g / %.3g / %.3g mm",
+                  cand->name.c_str(), cand->bonds, cand->bond_types, cand->parameters,
+                  1e3 * cand->held_out_rms_m[0], 1e3 * cand->held_out_rms_m[1],
+                  1e3 * cand->held_out_rms_m[2]);
+    say(line);
+  };
+  std::vector<std::string> signatures;  // per level: the kept structure before typing
+  std::vector<Model> untyped;           // per level: the kept bonds, one type each, values set
+  const size_t cumulative_levels = levels.size();
+  for (size_t level_index = 0; level_index < levels.size(); ++level_index) {
+    const Level level = levels[level_index];
+    const bool dampers = level.dampers;
+    const bool nonlinear = level.nonlinear_on >= 0;
     StructureCandidate cand;
-    cand.name = dampers ? "springs+dampers" : "springs";
+    cand.name = level.name;
     Model full = model;
-    addCandidateBonds(&full, pairs, fit, dampers);
+    if (nonlinear) {
+      // The non-linear level: the base level's kept bonds, values set.
+      full = untyped[level.nonlinear_on];
+    } else {
+      // Pairs the screening of an earlier level found start as candidates here.
+      addCandidateBonds(&full, std::vector<std::pair<int, int>>(all_candidates.begin(), all_candidates.end()),
+                        fit, dampers);
+      if (level.flexion) addCandidateFlexions(&full, triples, fit, dampers);
+      if (level.viscosity) addCandidateViscosities(&full);
+    }
+    // The non-linear level: rest lengths beside cubic terms enter linearised about the values.
+    EquationErrorOptions level_ee = ee;
+    level_ee.linearize_rest_length = nonlinear;
+    if (nonlinear) full = nonlinearCandidates(full, fit, ee, first_candidate_type);
+    Model kept_untyped;
+    std::string signature;
     std::vector<Group> groups;
     int screening_rounds = 0;
     for (int pass = 0; pass < kMaxPasses; ++pass) {
-      const EquationErrorSystem sys = buildEquationErrorSystem(full, fit, ee);
+      if (nonlinear) convergeLinearized(&full, fit, level_ee);
+      const EquationErrorSystem sys = buildEquationErrorSystem(full, fit, level_ee);
       if (!sys.reason.empty())
         throw InputError("structure selection: the equation error does not apply: " + sys.reason);
+      if (!sys.ata.allFinite() || !sys.atb.allFinite() || !std::isfinite(sys.btb))
+        throw InputError("structure selection: " + cand.name + ": the equation error is not finite "
+                         "(positions or values too large?)");
       const std::vector<ParamRef> refs = freeParameters(full);
       groups.clear();
       std::map<int, int> spring_group_of_type;
@@ -674,11 +1027,11 @@ StructureResult selectStructure(const Model& model, const Trajectory& data,
           always.push_back(static_cast<int>(j));
           continue;
         }
-        if (r.param == kDamping) {
+        if (r.param == kDamping || r.param == kStiffnessNl || r.param == kDampingNl) {
           Group g;
           g.columns = {static_cast<int>(j)};
           g.bond_type = r.bond_type;
-          g.damper = true;
+          g.term = r.param;
           groups.push_back(g);
           continue;
         }
@@ -693,7 +1046,8 @@ StructureResult selectStructure(const Model& model, const Trajectory& data,
         groups[it->second].columns.push_back(static_cast<int>(j));
       }
       for (size_t g = 0; g < groups.size(); ++g)
-        if (groups[g].damper) groups[spring_group_of_type.at(groups[g].bond_type)].child = static_cast<int>(g);
+        if (groups[g].term >= 0)
+          groups[spring_group_of_type.at(groups[g].bond_type)].children.push_back(static_cast<int>(g));
       if (!gravity.columns.empty()) groups.push_back(gravity);
       // Columns no row touches (a pair never seen) start inactive.
       for (Group& g : groups)
@@ -719,7 +1073,7 @@ StructureResult selectStructure(const Model& model, const Trajectory& data,
       // Bonds the neighbourhoods missed (long ones): pairs the residual asks for become
       // candidates too, and the selection runs again (at most 4 rounds of 20). Before the
       // non-physical drops: a missing bond makes true ones come out wrong.
-      if (screening_rounds < 4 && pass + 1 < kMaxPasses) {
+      if (!nonlinear && screening_rounds < 4 && pass + 1 < kMaxPasses) {
         std::set<std::pair<int, int>> have;
         for (const Bond& b : full.bonds)
           if (kindArity(full.bond_types[b.type].kind) == 2) have.insert(std::minmax(b.particles[0], b.particles[1]));
@@ -735,28 +1089,26 @@ StructureResult selectStructure(const Model& model, const Trajectory& data,
           continue;
         }
       }
-      if ((!solved.bad_springs.empty() || !solved.bad_dampers.empty()) && pass + 1 < kMaxPasses) {
+      if ((!solved.bad_bonds.empty() || !solved.bad_terms.empty()) && pass + 1 < kMaxPasses) {
         // Kept bonds that came out non-physical lose their spring (the bond goes) or their
         // damper; then the system is solved again. A type without a bond keeps no free value.
-        std::set<int> bad(solved.bad_springs.begin(), solved.bad_springs.end());
+        std::set<int> bad(solved.bad_bonds.begin(), solved.bad_bonds.end());
         std::vector<Bond> bonds;
         for (const Bond& b : full.bonds)
           if (!bad.count(b.type)) bonds.push_back(b);
         full.bonds = bonds;
-        for (int t : solved.bad_springs) {
+        for (int t : solved.bad_bonds) {
           BondType& type = full.bond_types[t];
-          type.param(kStiffness).free = false;
-          type.param(kStiffness).value = 0.0;
-          type.param(kRestLength).free = false;
-          type.param(kDamping) = Param();
+          for (ParamId id : paramsOfKind(type.kind)) type.param(id) = Param();
         }
-        for (int t : solved.bad_dampers) full.bond_types[t].param(kDamping) = Param();
-        say("structure: " + cand.name + ": " + std::to_string(solved.bad_springs.size()) +
-            " non-physical spring(s) and " + std::to_string(solved.bad_dampers.size()) +
-            " damper(s) dropped; solving again");
+        for (const auto& bad : solved.bad_terms)
+          full.bond_types[bad.first].param(static_cast<ParamId>(bad.second)) = Param();
+        say("structure: " + cand.name + ": " + std::to_string(solved.bad_bonds.size()) +
+            " non-physical bond(s) and " + std::to_string(solved.bad_terms.size()) +
+            " damping term(s) dropped; solving again");
         continue;
       }
-      if (!solved.bad_springs.empty() || !solved.bad_dampers.empty())
+      if (!solved.bad_bonds.empty() || !solved.bad_terms.empty())
         result.notes.push_back(cand.name + ": non-physical values remained after " +
                                std::to_string(kMaxPasses) + " passes");
       // Types: one per bond, or shared where the values agree; the criterion decides.
@@ -764,7 +1116,8 @@ StructureResult selectStructure(const Model& model, const Trajectory& data,
       int types = 0;
       Model typed = typeBonds(solved, first_candidate_type, options.type_sigmas, &types);
       // Types with no bond left (non-physical drops) do not exist in `solved.model`; typed too.
-      const EquationErrorResult typed_fit = solveEquationError(typed, fit, ee);
+      if (nonlinear) convergeLinearized(&typed, fit, level_ee);
+      const EquationErrorResult typed_fit = solveEquationError(typed, fit, level_ee);
       const int typed_params = static_cast<int>(freeParameters(typed).size());
       Model chosen = solved.model;
       double fit_rss = sel.rss_m2;
@@ -800,85 +1153,105 @@ StructureResult selectStructure(const Model& model, const Trajectory& data,
       cand.parameters = params;
       cand.fit_rms_m = std::sqrt(fit_rss / std::max<size_t>(sys.rows, 1));
       cand.bic = chosen_bic;
+      signature = structureSignature(solved.model, first_candidate_type);
+      kept_untyped = solved.model;
       break;
     }
-    if (options.refit) {
-      IdentifyOptions io = options.identify;
-      io.cost = CostChoice::kShortTerm;  // ranking only: the final fit is the caller's
-      io.generations = std::min(io.generations, options.refit_generations);
-      io.max_wall_time_s = io.max_wall_time_s > 0.0 ? std::min(io.max_wall_time_s, options.refit_max_s)
-                                                    : options.refit_max_s;
-      io.estimate_std = false;
-      const IdentifyResult r = identifyModel(cand.model, fit, io);
-      cand.model = r.model;
-      cand.refit_cost_m2 = r.global_cost;
+    untyped.push_back(kept_untyped);
+    // A level that kept none of its new components has an earlier level's structure: not
+    // refitted nor judged again (its figures are that level's).
+    const size_t same = std::find(signatures.begin(), signatures.end(), signature) - signatures.begin();
+    signatures.push_back(signature);
+    if (same + 1 < signatures.size()) {
+      const StructureCandidate& earlier = candidates[same];
+      const std::string name = cand.name;
+      cand = earlier;
+      cand.name = name;
+      cand.same_as = earlier.same_as.empty() ? earlier.name : earlier.same_as;
+      say("structure: " + name + ": none of its new components kept; the structure of " + cand.same_as);
+      candidates.push_back(std::move(cand));
+      untyped.back() = untyped[same];
+    } else {
+      refitAndJudge(&cand, nonlinear, first_candidate_type);
+      candidates.push_back(std::move(cand));
     }
-    heldOutErrors(cand.model, held, &cand);
-    char line[256];
-    std::snprintf(line, sizeof(line),
-                  "structure: %s: %d bonds, %d types, %d parameters; held-out RMS 1/5/10 frames "
-                  "ahead %.3g / %.3g / %.3g mm",
-                  cand.name.c_str(), cand.bonds, cand.bond_types, cand.parameters,
-                  1e3 * cand.held_out_rms_m[0], 1e3 * cand.held_out_rms_m[1],
-                  1e3 * cand.held_out_rms_m[2]);
-    say(line);
-    candidates.push_back(std::move(cand));
+    // After the cumulative levels: the non-linear terms on the best of them.
+    if (level_index + 1 == cumulative_levels && options.try_nonlinear) {
+      const int best = bestCandidate(candidates);
+      const int base = candidates[best].same_as.empty()
+                           ? best : static_cast<int>(std::find_if(candidates.begin(), candidates.end(),
+                               [&](const StructureCandidate& c) { return c.name == candidates[best].same_as; }) -
+                                                     candidates.begin());
+      levels.push_back({candidates[base].name + "+nonlinear", levels[base].dampers, levels[base].flexion,
+                        levels[base].viscosity, base});
+    }
   }
-  // The held-out 10-frame error decides; within 2 % of the best, the criterion (then fewer
-  // parameters) does.
-  double best_err = std::numeric_limits<double>::infinity();
-  for (const StructureCandidate& c : candidates)
-    if (std::isfinite(c.held_out_rms_m[2])) best_err = std::min(best_err, c.held_out_rms_m[2]);
-  int chosen = -1;
-  for (size_t i = 0; i < candidates.size(); ++i) {
-    const StructureCandidate& c = candidates[i];
-    const bool near = !std::isfinite(best_err) || (std::isfinite(c.held_out_rms_m[2]) &&
-                                                   c.held_out_rms_m[2] <= 1.02 * best_err);
-    if (!near) continue;
-    if (chosen < 0 || c.parameters < candidates[chosen].parameters ||
-        (c.parameters == candidates[chosen].parameters && c.bic < candidates[chosen].bic))
-      chosen = static_cast<int>(i);
-  }
+  const int chosen = bestCandidate(candidates);
   candidates[chosen].chosen = true;
+  for (StructureCandidate& c : candidates) c.model.frame_rate_hz = given.frame_rate_hz;
   result.model = candidates[chosen].model;
   result.candidates = std::move(candidates);
   return result;
 }
 
 StructureScore scoreStructure(const Model& truth, const Model& chosen) {
+  // Bonds by their particles' names: a pair sorted, a flexion as (vertex, sorted ends).
   const auto key = [](const Model& m, const Bond& b) {
-    std::string a = m.particles[b.particles[0]].name, c = m.particles[b.particles[1]].name;
+    const BondType& type = m.bond_types[b.type];
+    std::string a = m.particles[b.particles[0]].name;
+    std::string c = kindArity(type.kind) >= 2 ? m.particles[b.particles[kindArity(type.kind) - 1]].name : "";
     if (c < a) std::swap(a, c);
-    return std::make_pair(a, c);
+    const std::string v = kindArity(type.kind) == 3 ? m.particles[b.particles[1]].name : "";
+    return std::string(kindName(type.kind)) + "|" + v + "|" + a + "|" + c;
   };
-  std::map<std::pair<std::string, std::string>, const BondType*> want, got;
-  for (const Bond& b : truth.bonds)
-    if (kindArity(truth.bond_types[b.type].kind) == 2) want[key(truth, b)] = &truth.bond_types[b.type];
-  for (const Bond& b : chosen.bonds)
-    if (kindArity(chosen.bond_types[b.type].kind) == 2) got[key(chosen, b)] = &chosen.bond_types[b.type];
+  std::map<std::string, const BondType*> want[2], got[2];  // [0] pairs, [1] flexions
   StructureScore s;
-  int hit = 0;
-  for (const auto& g : got) hit += want.count(g.first) ? 1 : 0;
-  s.precision = got.empty() ? 0.0 : static_cast<double>(hit) / got.size();
-  s.recall = want.empty() ? 0.0 : static_cast<double>(hit) / want.size();
-  s.f1 = s.precision + s.recall > 0.0 ? 2.0 * s.precision * s.recall / (s.precision + s.recall) : 0.0;
+  for (const Bond& b : truth.bonds) {
+    const BondKind kind = truth.bond_types[b.type].kind;
+    if (kind == BondKind::kSpring || kind == BondKind::kFlexion)
+      want[kind == BondKind::kFlexion ? 1 : 0][key(truth, b)] = &truth.bond_types[b.type];
+  }
+  for (const Bond& b : chosen.bonds) {
+    const BondKind kind = chosen.bond_types[b.type].kind;
+    if (kind == BondKind::kSpring || kind == BondKind::kFlexion)
+      got[kind == BondKind::kFlexion ? 1 : 0][key(chosen, b)] = &chosen.bond_types[b.type];
+    if (kind == BondKind::kViscosity) ++s.viscosity_bonds;
+  }
+  double* precision[2] = {&s.precision, &s.flexion_precision};
+  double* recall[2] = {&s.recall, &s.flexion_recall};
+  double* f1[2] = {&s.f1, &s.flexion_f1};
+  for (int k = 0; k < 2; ++k) {
+    if (k == 1 && want[k].empty() && got[k].empty()) continue;  // no flexion anywhere: 1
+    int hit = 0;
+    for (const auto& g : got[k]) hit += want[k].count(g.first) ? 1 : 0;
+    *precision[k] = got[k].empty() ? 0.0 : static_cast<double>(hit) / got[k].size();
+    *recall[k] = want[k].empty() ? 0.0 : static_cast<double>(hit) / want[k].size();
+    *f1[k] = *precision[k] + *recall[k] > 0.0
+                 ? 2.0 * *precision[k] * *recall[k] / (*precision[k] + *recall[k]) : 0.0;
+  }
   s.types = static_cast<int>(chosen.bond_types.size());
-  s.damped_everywhere = s.damped_nowhere = true;
+  s.damped_everywhere = s.damped_nowhere = s.cubic_everywhere = s.cubic_nowhere = true;
   for (const BondType& t : chosen.bond_types) {
+    if (t.kind == BondKind::kViscosity) continue;
     const bool damped = t.value(kDamping) != 0.0;
     s.damped_everywhere = s.damped_everywhere && damped;
     s.damped_nowhere = s.damped_nowhere && !damped;
+    if (t.kind != BondKind::kSpring) continue;
+    const bool cubic = t.value(kStiffnessNl) != 0.0;
+    s.cubic_everywhere = s.cubic_everywhere && cubic;
+    s.cubic_nowhere = s.cubic_nowhere && !cubic;
   }
-  for (const auto& w : want) {
-    const auto g = got.find(w.first);
-    if (g == got.end()) continue;
-    for (ParamId id : {kStiffness, kRestLength, kDamping}) {
-      const double truth_value = w.second->value(id);
-      if (truth_value == 0.0) continue;
-      s.max_relative_error = std::max(
-          s.max_relative_error, std::fabs(g->second->value(id) - truth_value) / std::fabs(truth_value));
+  for (int k = 0; k < 2; ++k)
+    for (const auto& w : want[k]) {
+      const auto g = got[k].find(w.first);
+      if (g == got[k].end()) continue;
+      for (ParamId id : {kStiffness, k == 1 ? kRestAngle : kRestLength, kDamping, kStiffnessNl, kDampingNl}) {
+        const double truth_value = w.second->value(id);
+        if (truth_value == 0.0) continue;
+        s.max_relative_error = std::max(
+            s.max_relative_error, std::fabs(g->second->value(id) - truth_value) / std::fabs(truth_value));
+      }
     }
-  }
   return s;
 }
 
@@ -889,22 +1262,23 @@ std::string formatStructureReport(const StructureResult& r) {
                 "structure selection: %d candidate bonds; %d frames fitted, %d held out\n",
                 r.candidate_bonds, r.fitted_frames, r.held_out_frames);
   out << line;
-  std::snprintf(line, sizeof(line), "%-18s %6s %6s %6s %12s %12s %12s %10s %10s %10s %8s %s\n",
+  std::snprintf(line, sizeof(line), "%-34s %6s %6s %6s %12s %12s %12s %10s %10s %10s %8s %s\n",
                 "candidate", "bonds", "types", "params", "fit_rms_m", "bic", "refit_m2",
                 "held1_mm", "held5_mm", "held10_mm", "bounded", "");
   out << line;
   for (const StructureCandidate& c : r.candidates) {
     std::snprintf(line, sizeof(line),
-                  "%-18s %6d %6d %6d %12.4g %12.6g %12.4g %10.4g %10.4g %10.4g %8s %s\n",
+                  "%-34s %6d %6d %6d %12.4g %12.6g %12.4g %10.4g %10.4g %10.4g %8s %s%s\n",
                   c.name.c_str(), c.bonds, c.bond_types, c.parameters, c.fit_rms_m, c.bic,
                   c.refit_cost_m2, 1e3 * c.held_out_rms_m[0], 1e3 * c.held_out_rms_m[1],
                   1e3 * c.held_out_rms_m[2], c.rollout_bounded ? "yes" : "no",
-                  c.chosen ? "<- chosen" : "");
+                  c.chosen ? "<- chosen" : "",
+                  c.same_as.empty() ? "" : ("(= " + c.same_as + ")").c_str());
     out << line;
   }
   const char* guesses[3] = {"constant_velocity", "constant_acceleration", "gravity_only"};
   for (int g = 0; g < 3; ++g) {
-    std::snprintf(line, sizeof(line), "%-18s %6s %6s %6s %12s %12s %12s %10.4g %10.4g %10.4g\n",
+    std::snprintf(line, sizeof(line), "%-34s %6s %6s %6s %12s %12s %12s %10.4g %10.4g %10.4g\n",
                   guesses[g], "-", "-", "0", "-", "-", "-", 1e3 * r.guess_rms_m[g][0],
                   1e3 * r.guess_rms_m[g][1], 1e3 * r.guess_rms_m[g][2]);
     out << line;
@@ -916,18 +1290,18 @@ std::string formatStructureReport(const StructureResult& r) {
 std::string structureReportCsv(const StructureResult& r) {
   std::ostringstream out;
   out << "name,bonds,bond_types,parameters,fit_rms_m,bic,refit_cost_m2,held_out_rms_1_m,"
-         "held_out_rms_5_m,held_out_rms_10_m,rollout_bounded,chosen\n";
+         "held_out_rms_5_m,held_out_rms_10_m,rollout_bounded,chosen,same_as\n";
   char line[400];
   for (const StructureCandidate& c : r.candidates) {
-    std::snprintf(line, sizeof(line), "%s,%d,%d,%d,%.6g,%.9g,%.6g,%.6g,%.6g,%.6g,%d,%d\n",
+    std::snprintf(line, sizeof(line), "%s,%d,%d,%d,%.6g,%.9g,%.6g,%.6g,%.6g,%.6g,%d,%d,%s\n",
                   c.name.c_str(), c.bonds, c.bond_types, c.parameters, c.fit_rms_m, c.bic,
                   c.refit_cost_m2, c.held_out_rms_m[0], c.held_out_rms_m[1], c.held_out_rms_m[2],
-                  c.rollout_bounded ? 1 : 0, c.chosen ? 1 : 0);
+                  c.rollout_bounded ? 1 : 0, c.chosen ? 1 : 0, c.same_as.c_str());
     out << line;
   }
   const char* guesses[3] = {"constant_velocity", "constant_acceleration", "gravity_only"};
   for (int g = 0; g < 3; ++g) {
-    std::snprintf(line, sizeof(line), "%s,,,0,,,,%.6g,%.6g,%.6g,,0\n", guesses[g],
+    std::snprintf(line, sizeof(line), "%s,,,0,,,,%.6g,%.6g,%.6g,,0,\n", guesses[g],
                   r.guess_rms_m[g][0], r.guess_rms_m[g][1], r.guess_rms_m[g][2]);
     out << line;
   }

@@ -33,6 +33,8 @@ std::string formatStats(const EstimatorStats& s) {
     }
     text += s.prediction->rollout_bounded ? " rollout_bounded=1" : " rollout_bounded=0";
   }
+  if (!s.structure.empty())
+    text += " structure_selections=" + std::to_string(s.structure_selections) + " structure=" + s.structure;
   return text;
 }
 

@@ -105,12 +105,17 @@ EstimatorNodeOptions readEstimatorOptions(const ros::NodeHandle& pnh) {
   require(o.autosave_period_sec > 0.0 && std::isfinite(o.autosave_period_sec),
           "~autosave_period_sec must be > 0");
   read(pnh, "initial_model", &o.initial_model);
+  read(pnh, "select_structure", &o.select_structure);
+  read(pnh, "structure_report_path", &o.structure_report_path);
+  require(!o.structure_report_path.empty(), "~structure_report_path must not be empty");
   read(pnh, "prediction_period_sec", &o.prediction_period_sec);
   require(o.prediction_period_sec >= 0.0 && std::isfinite(o.prediction_period_sec),
           "~prediction_period_sec must be >= 0 (0 = off)");
   OnlineEstimatorOptions& e = o.estimator;
   read(pnh, "window_frames", &e.window_frames);
   require(e.window_frames >= 3, "~window_frames must be >= 3");
+  require(!o.select_structure || e.window_frames >= 35,
+          "~select_structure needs ~window_frames >= 35 (20 frames fitted, 15 held out)");
   e.min_frames = std::min(e.min_frames, e.window_frames);
   read(pnh, "min_frames", &e.min_frames);
   require(e.min_frames >= 3 && e.min_frames <= e.window_frames,
@@ -190,6 +195,18 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
     autosave_target_ = confinePath(options_.model_dir, options_.autosave_path, true, &error);
     if (autosave_target_.empty()) throw InputError("~autosave_path: " + error);
   }
+  if (options_.select_structure) {
+    std::string error;
+    structure_report_target_ = confinePath(options_.model_dir, options_.structure_report_path, true, &error);
+    if (structure_report_target_.empty()) throw InputError("~structure_report_path: " + error);
+    StructureOptions so;
+    so.identify.es.threads = estimator_options.es.threads;
+    so.progress = [](const std::string& line) { ROS_INFO("estimator_node: %s", line.c_str()); };
+    // A resumed model has its structure: the selection then waits for ~reset.
+    const bool resumed = estimator_options.resume_from_model_values;
+    structure_ = std::make_unique<StructureJob>(model, so, estimator_options.window_frames, !resumed);
+    estimator_options.wait_for_structure = true;
+  }
   estimator_ = std::make_unique<OnlineEstimator>(model, estimator_options);
   names_.setParticles(estimator_->particleNames());
   fixed_frame_ = options_.fixed_frame.empty() ? model.frame_id : options_.fixed_frame;
@@ -236,6 +253,7 @@ EstimatorNode::~EstimatorNode() {
   if (worker_.joinable()) worker_.join();
   if (markers_thread_.joinable()) markers_thread_.join();
   if (bag_thread_.joinable()) bag_thread_.join();
+  if (structure_thread_.joinable()) structure_thread_.join();
 }
 
 void EstimatorNode::reject(const std::string& why) {
@@ -375,6 +393,10 @@ void EstimatorNode::onStatsTimer(const ros::WallTimerEvent&) {
                         predictions_->lastError().c_str());
     stats.prediction = predictions_->report();
   }
+  if (structure_) {
+    stats.structure = structure_->status();
+    stats.structure_selections = structure_->selections();
+  }
   std_msgs::String msg;
   msg.data = formatStats(stats);
   stats_pub_.publish(msg);
@@ -392,6 +414,38 @@ void EstimatorNode::workerLoop() {
       update_stats_.onUpdate(steadyNowS());
     else
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+}
+
+void EstimatorNode::structureLoop() {
+  while (!stop_ && ros::ok()) {
+    const Trajectory window = structure_->pending() ? estimator_->window() : Trajectory();
+    if (window.numFrames() < structure_->minFrames()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      continue;
+    }
+    ROS_INFO("estimator_node: choosing the structure on a window of %d frames", window.numFrames());
+    const std::optional<StructureResult> r = structure_->runIfDue(window);
+    if (!r) {
+      if (structure_->status() == "failed")
+        ROS_ERROR("estimator_node: structure selection failed: %s (the next ~reset tries again)",
+                  structure_->lastError().c_str());
+      continue;
+    }
+    ROS_INFO("estimator_node: structure chosen:\n%s", formatStructureReport(*r).c_str());
+    try {
+      writeFileAtomically(structure_report_target_, structureReportCsv(*r));
+    } catch (const std::exception& e) {
+      ROS_ERROR("estimator_node: the structure report could not be written: %s", e.what());
+    }
+    try {
+      std::lock_guard<std::mutex> lock(input_mutex_);
+      estimator_->replaceModel(r->model);  // same particles: the window stays
+    } catch (const std::exception& e) {
+      ROS_ERROR("estimator_node: the chosen structure was refused: %s", e.what());
+      continue;
+    }
+    last_published_generation_ = 0;
   }
 }
 
@@ -421,9 +475,17 @@ void EstimatorNode::bagLoop() {
     addObservation(stamp, "", bag.marker_names, std::move(x), std::move(occ),
                    std::chrono::steady_clock::now());
     if (options_.bag_rate == 0.0 && t + 1 >= options_.estimator.min_frames) {
-      // As fast as the estimator keeps up: every window position gets one update.
-      while (update_stats_.updates() == before && !stop_ && ros::ok())
+      // As fast as the estimator keeps up: every window position gets one update. While a
+      // structure is to be chosen, frames go on until the window is full, then the selection
+      // and the chosen model's first update are waited for (a failed selection: frames go on).
+      while (update_stats_.updates() == before && !stop_ && ros::ok()) {
+        if (structure_) {
+          const std::string state = structure_->status();
+          if (state == "failed") break;
+          if (state == "pending" && t + 1 < structure_->minFrames()) break;
+        }
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      }
     }
   }
   ROS_INFO("estimator_node: bag replay finished; identification goes on on the last window");
@@ -502,6 +564,10 @@ bool EstimatorNode::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Resp
   last_published_generation_ = 0;
   res.success = true;
   res.message = "population cleared; identification restarts on the current window";
+  if (structure_) {
+    structure_->request();
+    res.message += "; the structure is chosen again on the next full window";
+  }
   return true;
 }
 
@@ -591,12 +657,14 @@ void EstimatorNode::run() {
   worker_ = std::thread(&EstimatorNode::workerLoop, this);
   markers_thread_ = std::thread(&EstimatorNode::markersLoop, this);
   if (!options_.bag.empty()) bag_thread_ = std::thread(&EstimatorNode::bagLoop, this);
+  if (structure_) structure_thread_ = std::thread(&EstimatorNode::structureLoop, this);
   ros::waitForShutdown();
   stop_ = true;
   markers_cv_.notify_all();
   worker_.join();
   markers_thread_.join();
   if (bag_thread_.joinable()) bag_thread_.join();
+  if (structure_thread_.joinable()) structure_thread_.join();
   spinner.stop();
 }
 

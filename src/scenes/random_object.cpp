@@ -1,5 +1,7 @@
 #include "motion_model_estimation/scenes/random_object.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -109,6 +111,10 @@ Model makeRandomObject(const RandomObjectSpec& spec) {
       const double c = spec.damping_max_nspm * std::exp(std::log(0.1) * random.uniform());
       type.param(kDamping) = Param{c, true, true, true, c / 10.0, c * 10.0, true, true};
     }
+    if (spec.stiffness_nl_scale > 0.0) {
+      const double k_nl = (0.5 + 0.5 * random.uniform()) * spec.stiffness_nl_scale * k / (length * length);
+      type.param(kStiffnessNl) = Param{k_nl, true, true, true, k_nl / 10.0, k_nl * 10.0, true, true};
+    }
     model.bond_types.push_back(type);
   }
   return model;
@@ -166,4 +172,105 @@ Model makeHangingObject(const HangingObjectSpec& spec) {
   return model;
 }
 
+Model makeChainObject(const ChainObjectSpec& spec) {
+  if (spec.chains < 3 || spec.links < 3 || spec.spring_types < 1 || spec.flexion_types < 1 ||
+      !(spec.frame_rate_hz > 0.0) || !(spec.segment_m > 0.0))
+    throw InputError("chain object: impossible spec (need chains >= 3, links >= 3, spring_types >= 1, "
+                     "flexion_types >= 1, frame_rate_hz > 0, segment_m > 0)");
+  constexpr double kPi = 3.14159265358979323846;
+  Random random(spec.seed);
+  Model model;
+  model.frame_rate_hz = spec.frame_rate_hz;
+  model.frame_id = "world";
+  const double h = 1.0 / spec.frame_rate_hz, s = spec.segment_m;
+  const auto bounded = [](double value, double lo, double hi) {
+    return Param{value, true, true, true, lo, hi, true, true};
+  };
+  const auto damping = [&](double max) {
+    const double c = max * std::exp(std::log(0.1) * random.uniform());
+    return bounded(c, c / 10.0, c * 10.0);
+  };
+  // Types: hub, segment springs, flexions. Stiffness as makeRandomObject's (omega h < ~0.3 with
+  // a margin for several bonds on a particle; masses >= 0.5 kg).
+  const double k_max = std::min(200.0, 0.09 * 0.5 / (h * h) / 6.0);
+  char name[32];
+  const auto spring = [&](const std::string& type_name, double length) {
+    BondType type;
+    type.name = type_name;
+    type.kind = BondKind::kSpring;
+    const double k = k_max * std::exp(std::log(0.1) * random.uniform());
+    type.param(kStiffness) = bounded(k, k / 10.0, k * 10.0);
+    const double rest = length * (0.9 + 0.2 * random.uniform());
+    type.param(kRestLength) = bounded(rest, rest / 2.0, rest * 2.0);
+    if (spec.damping_max_nspm > 0.0) type.param(kDamping) = damping(spec.damping_max_nspm);
+    model.bond_types.push_back(type);
+  };
+  spring("hub", s);
+  for (int t = 0; t < spec.spring_types; ++t) {
+    std::snprintf(name, sizeof(name), "seg%02d", t);
+    spring(name, s);
+  }
+  const int first_flexion = static_cast<int>(model.bond_types.size());
+  std::vector<double> rest_angle(spec.flexion_types);
+  for (int t = 0; t < spec.flexion_types; ++t) {
+    BondType type;
+    std::snprintf(name, sizeof(name), "flex%02d", t);
+    type.name = name;
+    type.kind = BondKind::kFlexion;
+    // Bending a segment end by dy turns the angle by dy / s: an effective stiffness k_f / s^2.
+    const double k = 0.3 * k_max * s * s * std::exp(std::log(0.1) * random.uniform());
+    type.param(kStiffness) = bounded(k, k / 10.0, k * 10.0);
+    rest_angle[t] = (150.0 + 22.0 * random.uniform()) * kPi / 180.0;
+    type.param(kRestAngle) = bounded(rest_angle[t], 0.5 * rest_angle[t], kPi);
+    if (spec.damping_max_nspm > 0.0) type.param(kDamping) = damping(spec.damping_max_nspm * s * s);
+    model.bond_types.push_back(type);
+  }
+  // Particles: roots on an equilateral triangle (edge s) in the z = 0 plane, then each chain
+  // outwards, every inner particle bent by its type's rest angle about a random axis.
+  const int n_chains = spec.chains;
+  std::vector<std::vector<int>> chain(n_chains);
+  const double hub_radius = s / (2.0 * std::sin(kPi / n_chains));
+  const auto addParticle = [&](const Eigen::Vector3d& x) {
+    Particle p;
+    std::snprintf(name, sizeof(name), "c%02d", static_cast<int>(model.particles.size()));
+    p.name = name;
+    p.mass_kg = 0.5 + 1.5 * random.uniform();
+    p.position_m = x;
+    for (int c = 0; c < 3; ++c) p.velocity_mps[c] = 0.1 * (random.uniform() - 0.5);
+    model.particles.push_back(p);
+    return static_cast<int>(model.particles.size()) - 1;
+  };
+  for (int c = 0; c < n_chains; ++c) {
+    const double phi = 2.0 * kPi * c / n_chains;
+    const Eigen::Vector3d out(std::cos(phi), std::sin(phi), 0.0);
+    chain[c].push_back(addParticle(hub_radius * out));
+    Eigen::Vector3d dir = (out + Eigen::Vector3d(0.0, 0.0, 0.6 * (random.uniform() - 0.5))).normalized();
+    chain[c].push_back(addParticle(model.particles[chain[c][0]].position_m + s * dir));
+    const int flex = first_flexion + c % spec.flexion_types;
+    for (int k = 2; k < spec.links; ++k) {
+      // Turn by pi - theta0 about an axis perpendicular to the chain.
+      Eigen::Vector3d axis = dir.cross(Eigen::Vector3d(random.uniform() - 0.5, random.uniform() - 0.5,
+                                                       random.uniform() - 0.5));
+      axis.normalize();
+      const double turn = kPi - rest_angle[flex - first_flexion];
+      dir = (std::cos(turn) * dir + std::sin(turn) * axis.cross(dir)).normalized();
+      chain[c].push_back(addParticle(model.particles[chain[c][k - 1]].position_m + s * dir));
+    }
+  }
+  const auto addBond = [&](int type, int a, int b, int c) {
+    Bond bond;
+    bond.type = type;
+    bond.particles = {{a, b, c}};
+    model.bonds.push_back(bond);
+  };
+  for (int c = 0; c < n_chains; ++c) addBond(0, chain[c][0], chain[(c + 1) % n_chains][0], -1);
+  for (int c = 0; c < n_chains; ++c) {
+    const int seg = 1 + c % spec.spring_types, flex = first_flexion + c % spec.flexion_types;
+    for (int k = 1; k < spec.links; ++k) addBond(seg, chain[c][k - 1], chain[c][k], -1);
+    for (int k = 1; k + 1 < spec.links; ++k) addBond(flex, chain[c][k - 1], chain[c][k], chain[c][k + 1]);
+  }
+  return model;
+}
+
 }  // namespace mme
+

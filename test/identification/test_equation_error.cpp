@@ -93,6 +93,61 @@ TEST(EquationError, SmoothingHelpsOnNoisyMarkers) {
   EXPECT_LT(fit_sum, 0.5 * raw_sum);
 }
 
+// With the rest length known, a cubic stiffness (hardening or softening) and a quadratic
+// damping are linear unknowns too: exact with k and c beside them.
+TEST(EquationError, ExactForNonLinearTermsWithTheRestLengthKnown) {
+  mme::Model truth;
+  truth.frame_rate_hz = 200;
+  for (int i = 0; i < 4; ++i)
+    addParticle(&truth, Eigen::Vector3d(0.1 * i, 0.03 * (i % 2), 0.0), 0.5, i == 0, "",
+                Eigen::Vector3d(0.0, 0.2 * i, -0.1 * i));
+  const int hard = addType(&truth, "hard", mme::BondKind::kSpring,
+                           {{mme::kStiffness, 40.0}, {mme::kRestLength, 0.08}, {mme::kStiffnessNl, 4e4},
+                            {mme::kDamping, 0.2}, {mme::kDampingNl, 0.5}});
+  const int soft = addType(&truth, "soft", mme::BondKind::kSpring,
+                           {{mme::kStiffness, 60.0}, {mme::kRestLength, 0.12}, {mme::kStiffnessNl, -2e3}});
+  for (int i = 0; i < 3; ++i) addBond(&truth, hard, i, i + 1);
+  addBond(&truth, soft, 0, 2);
+  addBond(&truth, soft, 1, 3);
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 100, truth.frame_rate_hz);
+  mme::Model blank = mme::test::withoutValues(truth);
+  for (mme::BondType& t : blank.bond_types) {
+    t.param(mme::kRestLength).free = false;  // known: the value of the truth
+    t.param(mme::kRestLength).value = truth.bond_types[&t - blank.bond_types.data()].value(mme::kRestLength);
+    t.param(mme::kRestLength).has_value = true;
+  }
+  const mme::EquationErrorResult r = mme::solveEquationError(blank, data);
+  ASSERT_TRUE(r.applicable) << r.reason;
+  EXPECT_EQ(r.values.size(), 6u);  // hard: k, c, k_nl, c_nl; soft: k, k_nl
+  std::vector<double> want;
+  for (const mme::ParamRef& ref : mme::freeParameters(blank)) want.push_back(mme::getParam(truth, ref));
+  EXPECT_LT(maxRelativeError(r.values, want), 1e-6);
+  EXPECT_LT(r.residual_rms_m, 1e-12);
+  // A free rest length beside a free cubic term: not linear, said so.
+  mme::Model both = blank;
+  both.bond_types[hard].param(mme::kRestLength).free = true;
+  const mme::EquationErrorResult no = mme::solveEquationError(both, data);
+  EXPECT_FALSE(no.applicable);
+  EXPECT_NE(no.reason.find("hard/rest_length"), std::string::npos) << no.reason;
+  // Linearised about values 5 % off (rest lengths, stiffnesses): each solve is a Gauss-Newton
+  // step; a few reach the truth.
+  mme::EquationErrorOptions linearized;
+  linearized.linearize_rest_length = true;
+  mme::Model guess = truth;
+  for (mme::BondType& t : guess.bond_types) t.param(mme::kRestLength).value *= 1.05;
+  for (mme::BondType& t : guess.bond_types) t.param(mme::kStiffness).value *= 0.95;
+  const std::vector<mme::ParamRef> refs = mme::freeParameters(guess);
+  double first_error = 0.0;
+  for (int step = 0; step < 8; ++step) {
+    const mme::EquationErrorResult g = mme::solveEquationError(guess, data, linearized);
+    ASSERT_TRUE(g.applicable) << g.reason;
+    if (step == 0) first_error = maxRelativeError(g.values, truthOf(truth));
+    mme::setValues(guess, refs, g.values);
+  }
+  EXPECT_GT(first_error, 1e-4);  // one step is not enough from 5 % off
+  EXPECT_LT(maxRelativeError(mme::getValues(guess, refs), truthOf(truth)), 1e-7);
+}
+
 TEST(EquationError, SaysWhyItDoesNotApply) {
   mme::Model m = mme::test::smallObject();
   m.bond_types[0].param(mme::kMinDistance) = mme::test::valueParam(0.1, true);

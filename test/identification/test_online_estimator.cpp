@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/identifier.h"
 #include "motion_model_estimation/identification/online_estimator.h"
@@ -99,6 +100,32 @@ TEST(OnlineEstimator, OnAStillWindowTheEstimateMatchesTheOfflineIdentification) 
   const double online = estimator.estimate().global_cost;
   EXPECT_LE(online, 2.0 * r.global_cost) << "online " << online << ", identify " << r.global_cost;
   EXPECT_GE(online, 0.5 * r.global_cost);
+}
+
+}  // namespace
+
+namespace {
+
+// ~select_structure: the particles alone are refused unless the estimator waits for a structure;
+// then it collects frames without identifying, and a model with free parameters starts it on
+// the same window.
+TEST(OnlineEstimator, WaitsForAStructureWithTheParticlesAlone) {
+  Fixture f;
+  mme::Model particles = f.truth;
+  particles.bonds.clear();
+  particles.bond_types.clear();
+  mme::OnlineEstimatorOptions options;
+  options.window_frames = 60;
+  EXPECT_THROW(mme::OnlineEstimator refused(particles, options), mme::InputError);
+  options.wait_for_structure = true;
+  mme::OnlineEstimator estimator(particles, options);
+  feed(&estimator, f.data, 0, 60);
+  EXPECT_FALSE(estimator.update());
+  EXPECT_FALSE(estimator.estimate().valid);
+  estimator.replaceModel(f.search);
+  EXPECT_EQ(estimator.window().numFrames(), 60);  // same particles: the window stays
+  ASSERT_TRUE(estimator.update());
+  EXPECT_TRUE(estimator.estimate().valid);
 }
 
 }  // namespace

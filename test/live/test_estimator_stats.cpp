@@ -57,4 +57,13 @@ TEST(EstimatorStats, PredictionFieldsPerHorizonAndPredictorInMillimetres) {
   EXPECT_NE(mme::formatStats(s).find(" rollout_bounded=1"), std::string::npos);
 }
 
+TEST(EstimatorStats, StructureStateLastWhenSelectionIsOn) {
+  mme::EstimatorStats s;
+  EXPECT_EQ(mme::formatStats(s).find("structure="), std::string::npos);
+  s.structure = "chosen:springs+dampers";
+  s.structure_selections = 2;
+  const std::string line = mme::formatStats(s);
+  EXPECT_EQ(line.substr(line.size() - 56), " structure_selections=2 structure=chosen:springs+dampers");
+}
+
 }  // namespace

@@ -11,7 +11,8 @@ set(MME_ESTIMATOR_TEST_NODES
   test_estimator_convergence   # live, bag and the three other input forms
   test_estimator_services      # ~reset, ~export_model, ~load_model
   test_estimator_tracking      # a parameter step followed
-  test_estimator_bad_input)    # bad frames survived and counted
+  test_estimator_bad_input     # bad frames survived and counted
+  test_estimator_structure)    # ~select_structure on a bag
 foreach(node ${MME_ESTIMATOR_TEST_NODES})
   add_executable(${node} EXCLUDE_FROM_ALL test/ros/${node}.cpp)
   target_link_libraries(${node} mme_ros ${MME_LIBS} ${catkin_LIBRARIES} ${GTEST_LIBRARIES})
@@ -62,3 +63,6 @@ mme_add_estimator_rostest(estimator_services ARGS "model_dir:=${MME_ESTIMATOR_TE
   DEPENDENCIES test_estimator_services simulator_node mme_estimator_test_data)
 mme_add_estimator_rostest(estimator_tracking DEPENDENCIES test_estimator_tracking simulator_node)
 mme_add_estimator_rostest(estimator_bad_input DEPENDENCIES test_estimator_bad_input)
+mme_add_estimator_rostest(estimator_structure
+  ARGS "bag:=${MME_ESTIMATOR_TEST_BAG}" "model_dir:=${MME_ESTIMATOR_TEST_DIR}/structure_models"
+  DEPENDENCIES test_estimator_structure mme_estimator_test_data)

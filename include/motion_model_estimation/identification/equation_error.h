@@ -1,7 +1,7 @@
 // A start for identification that needs no search: the forces of springs, dampers, flexion,
-// viscosity and gravity are linear in (k, k L, c, k theta0, c_v, g), so Newton's law written on
-// every observed frame, m a = F(x, v), is a linear least-squares problem in them (the equation
-// error). Accelerations come from finite differences of the positions, raw or smoothed by a local
+// viscosity and gravity are linear in (k, k L, c, k theta0, c_v, g; with L known, k_nl and c_nl),
+// so Newton's law written on every observed frame, m a = F(x, v), is a linear least-squares
+// problem in them (the equation error). Accelerations come from finite differences of the positions, raw or smoothed by a local
 // quadratic fit (Savitzky-Golay) when the markers are noisy. Exact on noiseless data with one
 // step per frame; a good start elsewhere, wherever the search bounds are.
 #pragma once
@@ -21,6 +21,11 @@ struct EquationErrorOptions {
   /// one-step prediction of semi-implicit Euler). w >= 2: a quadratic fitted to the 2w+1 frames
   /// around each frame gives x, v and a (noise averaged out, motion slightly smoothed).
   int smoothing_half_width = 0;
+  /// A spring type whose stiffness, rest length and cubic stiffness_nl are all free: its rest
+  /// length enters non-linearly; with this, it is linearised about the model's values (k0, L0,
+  /// k_nl0 must be set), so a solve is one Gauss-Newton step and repeated solves (values set
+  /// from the last) converge. Without it such a type makes the equation error not applicable.
+  bool linearize_rest_length = false;
 };
 
 struct EquationErrorResult {
@@ -41,6 +46,9 @@ struct EquationErrorSystem {
   /// Per column: the free parameter (index into freeParameters(model)) it determines, and for a
   /// product column (k L, k theta0) the stiffness column it is divided by (-1 otherwise).
   std::vector<int> column_param, column_partner;
+  /// Per column: added to the coefficient to give the parameter (a linearised rest length's L0;
+  /// 0 otherwise).
+  std::vector<double> column_offset;
   Eigen::MatrixXd ata;              ///< A^T A of the weighted rows
   Eigen::VectorXd atb;              ///< A^T b
   double btb = 0.0;                 ///< b^T b
@@ -52,10 +60,11 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
                                              const EquationErrorOptions& options = {});
 
 /// Solves the equation error for the model's free parameters. Applicable when every free
-/// parameter is a spring's stiffness, rest_length or damping, a flexion's stiffness, rest_angle
-/// or damping, a viscosity or a gravity component, and no free parameter enters non-linearly
-/// (a free rest_length with a non-zero stiffness_nl, free conditions, free Provot clamps and free
-/// interaction parameters are not). `trajectory` has the model's particles as markers.
+/// parameter is a spring's stiffness, rest_length, damping, damping_nl or (its rest_length
+/// known) stiffness_nl, a flexion's stiffness, rest_angle or damping, a viscosity or a gravity
+/// component, and no free parameter enters non-linearly (a free rest_length with a non-zero or
+/// free stiffness_nl, free conditions, free Provot clamps and free interaction parameters are
+/// not). `trajectory` has the model's particles as markers.
 EquationErrorResult solveEquationError(const Model& model, const Trajectory& trajectory,
                                        const EquationErrorOptions& options = {});
 

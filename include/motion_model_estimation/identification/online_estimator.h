@@ -47,6 +47,9 @@ struct OnlineEstimatorOptions {
   /// Start the population at the model's values of the free parameters when all have one
   /// (resuming an autosaved model) instead of the paper's random initialisation.
   bool resume_from_model_values = false;
+  /// Accept a model with no free parameter (the particles alone, while a structure is being
+  /// chosen): frames are collected and update() returns false until replaceModel() gives one.
+  bool wait_for_structure = false;
   EsOptions es = onlineEsOptions();  ///< population, seed, threads, operators
 };
 

@@ -4,19 +4,24 @@
 // 1. Candidate bonds from the fitted frames: each particle's nearest neighbours by mean distance,
 //    and every pair whose distance varies little (a near-rigid pair); later, pairs the residual
 //    asks for (long bonds the neighbourhoods missed). Bonds already in the model stay as they are.
-// 2. Candidate components in rising complexity: springs; springs + dampers. For each, one spring
-//    type per candidate bond, and the equation error (forces linear in k, k L, c; gravity when
-//    the model's gravity is free) is thinned by grouped backward elimination: the group (a
-//    bond's spring, a bond's damper, gravity) whose removal raises the residual least goes while
-//    that rise is below the Bayesian information criterion's price of its parameters; a damper
-//    never outlives its spring. Bonds that come out non-physical are dropped and it runs again.
-// 3. Bond typing: bonds whose solved (k, L, c) agree within 3 of their standard deviations share
-//    a type, kept when the criterion says the merged model is as good.
+// 2. Candidate components in rising complexity, each level holding every component of the ones
+//    before: springs; + dampers; + flexion (near-collinear triples of candidate partners: a
+//    chain's bend, which springs resist only at second order); + viscosity (a drag per particle).
+//    Every candidate bond (or particle) starts with a type of its own, and the equation error
+//    (forces linear in k, k L, c, k theta0, c_v; gravity when the model's gravity is free) is
+//    thinned by grouped backward elimination: the group (a bond's spring or flexion, its damper,
+//    a particle's drag, gravity) whose removal raises the residual least goes while that rise is
+//    below the Bayesian information criterion's price of its parameters; a damper never outlives
+//    its bond. Bonds that come out non-physical are dropped and it runs again. A level that keeps
+//    none of its new components is the structure of an earlier one and is not refitted.
+// 3. Bond typing: bonds of one kind whose solved values (k, L, c; k, theta0, c; c_v) agree within
+//    3 of their standard deviations share a type, kept when the criterion says the merged model
+//    is as good.
 // 4. Each level's typed model is refitted by the full identification (identifyModel) on the
 //    fitted frames and judged on the held-out frames (the end of the window, never fitted): the
 //    open-loop prediction error 10 frames ahead decides, the criterion breaks ties (within 2 %).
 //
-// Flexion, non-linear, conditional and viscous candidates are not tried yet.
+// Non-linear and conditional components are not tried yet.
 #pragma once
 
 #include <cstdint>
@@ -36,7 +41,13 @@ struct StructureOptions {
   int max_candidates = 600;       ///< most candidate bonds (the nearest kept)
   double held_out_share = 0.2;    ///< the window's end kept for judging (at least 15 frames)
   double type_sigmas = 3.0;       ///< bonds agreeing within this many std share a type
-  bool try_dampers = true;        ///< the springs + dampers level
+  bool try_dampers = true;        ///< the springs + dampers level (and dampers on flexion after it)
+  bool try_flexion = true;        ///< the + flexion level (when some triple is near-collinear)
+  double flexion_min_angle_rad = 2.4;  ///< a flexion candidate's mean angle at its vertex (~138 deg)
+  bool try_viscosity = true;      ///< the + viscosity level
+  /// The non-linear level: on the kept bonds of the best level so far, a cubic stiffness per
+  /// spring (and a quadratic damping per damper), rest lengths held at the linear fit's.
+  bool try_nonlinear = true;
   bool refit = true;              ///< refit each level with identifyModel (else equation error only)
   int refit_generations = 100;    ///< the ranking refit's generation budget per level
   double refit_max_s = 20.0;      ///< ... and wall time [s]
@@ -46,7 +57,10 @@ struct StructureOptions {
 
 /// One candidate model tried.
 struct StructureCandidate {
-  std::string name;              ///< e.g. "springs", "springs+dampers"
+  std::string name;              ///< e.g. "springs", "springs+dampers", "springs+dampers+flexion"
+  /// Not empty: this level kept none of its new components, so it is that earlier level's
+  /// structure (its figures are that level's; not refitted again).
+  std::string same_as;
   int bonds = 0;
   int bond_types = 0;
   int parameters = 0;            ///< free parameters
@@ -82,19 +96,25 @@ StructureResult selectStructure(const Model& model, const Trajectory& data,
 /// A chosen structure against a known truth (tests and benchmarks): bonds matched by their
 /// particles' names.
 struct StructureScore {
-  double precision = 0.0, recall = 0.0, f1 = 0.0;  ///< of the bonds
+  double precision = 0.0, recall = 0.0, f1 = 0.0;  ///< of the two-particle bonds
+  /// Of the flexion bonds (matched by vertex and ends); 1 when neither model has one.
+  double flexion_precision = 1.0, flexion_recall = 1.0, flexion_f1 = 1.0;
+  int viscosity_bonds = 0;         ///< viscosity bonds of the chosen model
   int types = 0;                   ///< bond types of the chosen model
   bool damped_everywhere = false;  ///< every chosen type has a non-zero damping
   bool damped_nowhere = false;     ///< no chosen type has one
-  /// Largest relative error of k, L and c of a true bond's chosen type against its true type,
-  /// over the true bonds found (damping only where the truth has one).
+  bool cubic_everywhere = false;   ///< every chosen spring type has a cubic stiffness
+  bool cubic_nowhere = false;      ///< no chosen spring type has one
+  /// Largest relative error of k, L (theta0), c, k_nl and c_nl of a true bond's chosen type
+  /// against its true type, over the true bonds and flexions found (each term only where the
+  /// truth has it).
   double max_relative_error = 0.0;
 };
 StructureScore scoreStructure(const Model& truth, const Model& chosen);
 
 /// The report of every candidate as text (a table) and as CSV
 /// (name,bonds,bond_types,parameters,fit_rms_m,bic,refit_cost_m2,held_out_rms_1_m,
-///  held_out_rms_5_m,held_out_rms_10_m,rollout_bounded,chosen).
+///  held_out_rms_5_m,held_out_rms_10_m,rollout_bounded,chosen,same_as).
 std::string formatStructureReport(const StructureResult& result);
 std::string structureReportCsv(const StructureResult& result);
 

@@ -22,6 +22,8 @@ struct EstimatorStats {
   UpdateGapSummary updates;  ///< estimate updates and the gaps between them
   LatencySummary latency;    ///< arrival -> ~markers of drawn frames
   std::optional<PredictionReport> prediction;  ///< the model's predictions on the window
+  std::string structure;     ///< ~select_structure's state (StructureJob::status), "" = off
+  uint32_t structure_selections = 0;  ///< ... and the selections that chose a model
 };
 
 /// "accepted=N rejected=N occluded=N rejected_time=N rejected_size=N clock_jumps=N updates=N
@@ -30,7 +32,8 @@ struct EstimatorStats {
 /// then, once a prediction report exists, per horizon K and predictor P (its CSV name: model,
 /// constant_velocity, constant_acceleration, gravity_only) "predict<K>_<P>_mm=X" (RMS per
 /// coordinate [mm], 3 decimals; horizons without a sample are left out) and
-/// "rollout_bounded=0|1".
+/// "rollout_bounded=0|1"; with ~select_structure, "structure_selections=N" (selections that
+/// chose a model) and "structure=idle|pending|running|chosen:<level>|failed".
 std::string formatStats(const EstimatorStats& stats);
 
 }  // namespace mme

@@ -29,6 +29,7 @@
 #include "motion_model_estimation/live/latency_stats.h"
 #include "motion_model_estimation/live/marker_name_map.h"
 #include "motion_model_estimation/live/prediction_monitor.h"
+#include "motion_model_estimation/live/structure_job.h"
 #include "motion_model_estimation/live/update_gap_stats.h"
 #include "motion_model_estimation/live/visualisation_snapshot.h"
 #include "motion_model_estimation/ros/marker_builder.h"
@@ -61,6 +62,10 @@ struct EstimatorNodeOptions {
   double autosave_period_sec = 10.0;   ///< [s] between autosaves
   std::string initial_model;           ///< resume from this model file when it exists
   double prediction_period_sec = PredictionMonitor::kDefaultPeriodS;  ///< [s]; 0 = off
+  /// Choose the structure from the markers on the first full window and on ~reset; the model
+  /// may then hold the particles alone (structure_selection.h).
+  bool select_structure = false;
+  std::string structure_report_path = "structure_report.csv";  ///< inside model_dir
   OnlineEstimatorOptions estimator;
 };
 
@@ -87,6 +92,9 @@ class EstimatorNode {
                       std::chrono::steady_clock::time_point arrival);
   void reject(const std::string& why);
   void workerLoop();
+  /// ~select_structure: chooses the structure when requested and the window is full, then
+  /// hands the model to the estimator and writes the report.
+  void structureLoop();
   void bagLoop();
   void onPublishTimer(const ros::WallTimerEvent&);
   /// ~markers thread: rebuilds the rviz markers as soon as a frame is accepted (latest frame
@@ -115,7 +123,9 @@ class EstimatorNode {
   ros::ServiceServer reset_srv_, export_srv_, load_srv_;
   ros::WallTimer publish_timer_, autosave_timer_, stats_timer_;
   std::string autosave_target_;  // confined absolute path, "" = off
-  std::thread worker_, bag_thread_, markers_thread_;
+  std::thread worker_, bag_thread_, markers_thread_, structure_thread_;
+  std::unique_ptr<StructureJob> structure_;  // null unless ~select_structure
+  std::string structure_report_target_;      // confined absolute path
   // Marker thread hand-off (markersLoop): the newest accepted frame's arrival and a counter.
   std::mutex markers_mutex_;
   std::condition_variable markers_cv_;

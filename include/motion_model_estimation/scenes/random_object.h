@@ -17,6 +17,9 @@ struct RandomObjectSpec {
   /// > 0: every type also has a free damping, drawn log-uniformly in [damping_max / 10,
   /// damping_max] [N s/m] (light: the floating object keeps moving for tens of seconds).
   double damping_max_nspm = 0.0;
+  /// > 0: every type also has a free cubic stiffness k_nl = u * this * k / L^2 (u uniform in
+  /// [0.5, 1]; hardening: at a strain of 10 % it adds u * this % to the tension) [1].
+  double stiffness_nl_scale = 0.0;
   uint64_t seed = 1;
 };
 
@@ -42,5 +45,27 @@ struct HangingObjectSpec {
 /// 0.02-0.3 N s/m. Free parameters carry their true values and no bounds (the defaults must do).
 /// Throws InputError on an impossible spec.
 Model makeHangingObject(const HangingObjectSpec& spec);
+
+struct ChainObjectSpec {
+  int chains = 3;              ///< chains hanging off a hub triangle of their roots (>= 3)
+  int links = 5;               ///< particles per chain, root included (>= 3: one flexion at least)
+  int spring_types = 2;        ///< segment spring types (chains round-robin)
+  int flexion_types = 2;       ///< flexion types at the chains' inner particles (round-robin)
+  double frame_rate_hz = 120.0;
+  double segment_m = 0.06;     ///< segment length [m]
+  /// > 0: every type also has a free damping (springs up to this [N s/m], flexion up to this
+  /// times the segment length squared [N m s/rad]).
+  double damping_max_nspm = 0.0;
+  uint64_t seed = 1;
+};
+
+/// A floating object of bent chains (no gravity, no fixed particle): the roots form an
+/// equilateral triangle of one spring type ("hub"); each chain is a line of springs whose inner
+/// particles carry a flexion bond (vertex at the particle, its neighbours on the chain) at the
+/// type's rest angle (150-172 deg: near-collinear). The chains start at their rest shape with
+/// random velocities and spring rest lengths 0.9-1.1 of the segment, so they vibrate and bend.
+/// Free parameters carry their true values, bounds as makeRandomObject. Throws InputError on an
+/// impossible spec.
+Model makeChainObject(const ChainObjectSpec& spec);
 
 }  // namespace mme

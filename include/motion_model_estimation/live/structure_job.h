@@ -1,0 +1,49 @@
+// The live node's structure selection (~select_structure): chooses the model's structure on the
+// first window that is long enough and again on request (~reset), from the model the node
+// started with (the particles, possibly some bonds). No ROS here: the node runs it on a thread
+// of its own and hands the chosen model to the estimator.
+#pragma once
+
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include "motion_model_estimation/core/model.h"
+#include "motion_model_estimation/core/trajectory.h"
+#include "motion_model_estimation/identification/structure_selection.h"
+
+namespace mme {
+
+class StructureJob {
+ public:
+  /// `min_frames`: the window length a selection waits for (at least the 35 frames selection
+  /// needs: 20 fitted, 15 held out). `request_first`: the first selection is requested now
+  /// (else on the first request()).
+  StructureJob(Model base, StructureOptions options, int min_frames, bool request_first = true);
+
+  /// (Re)selects on the next window holding min_frames frames (thread-safe).
+  void request();
+  bool pending() const;
+  /// Runs the selection when one is requested and `window` holds enough frames (blocking; call
+  /// from one thread). Returns the result, or nothing when it did not run or failed (status()
+  /// then says why).
+  std::optional<StructureResult> runIfDue(const Trajectory& window);
+  /// "idle" (nothing requested yet), "pending", "running", "chosen:<level>", "failed"
+  /// (thread-safe), for ~stats.
+  std::string status() const;
+  std::string lastError() const;
+  int minFrames() const { return min_frames_; }
+  uint32_t selections() const;  ///< selections that chose a model
+
+ private:
+  Model base_;
+  StructureOptions options_;
+  int min_frames_;
+  mutable std::mutex mutex_;
+  bool requested_ = true;
+  std::string status_ = "pending";
+  std::string error_;
+  uint32_t selections_ = 0;
+};
+
+}  // namespace mme

@@ -1,0 +1,69 @@
+#include "motion_model_estimation/live/structure_job.h"
+
+#include <algorithm>
+#include <exception>
+#include <utility>
+
+namespace mme {
+
+namespace {
+constexpr int kSelectionMinFrames = 35;  ///< selectStructure: 20 fitted + 15 held out
+}
+
+StructureJob::StructureJob(Model base, StructureOptions options, int min_frames, bool request_first)
+    : base_(std::move(base)), options_(std::move(options)),
+      min_frames_(std::max(min_frames, kSelectionMinFrames)), requested_(request_first),
+      status_(request_first ? "pending" : "idle") {}
+
+void StructureJob::request() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  requested_ = true;
+  if (status_ != "running") status_ = "pending";
+}
+
+bool StructureJob::pending() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return requested_;
+}
+
+std::optional<StructureResult> StructureJob::runIfDue(const Trajectory& window) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!requested_ || window.numFrames() < min_frames_) return std::nullopt;
+    requested_ = false;
+    status_ = "running";
+  }
+  try {
+    StructureResult result = selectStructure(base_, window, options_);
+    std::string level;
+    for (const StructureCandidate& c : result.candidates)
+      if (c.chosen) level = c.name;
+    std::lock_guard<std::mutex> lock(mutex_);
+    status_ = requested_ ? "pending" : "chosen:" + level;
+    ++selections_;
+    error_.clear();
+    return result;
+  } catch (const std::exception& e) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    status_ = requested_ ? "pending" : "failed";
+    error_ = e.what();
+    return std::nullopt;
+  }
+}
+
+std::string StructureJob::status() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return status_;
+}
+
+std::string StructureJob::lastError() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return error_;
+}
+
+uint32_t StructureJob::selections() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return selections_;
+}
+
+}  // namespace mme

@@ -1,0 +1,72 @@
+// The live node's structure selection: it waits for a window long enough, chooses the structure
+// of a random object from its particles alone, runs once per request (the first at start, then
+// ~reset), and a window it cannot use leaves it failed with the reason and no model.
+#include <gtest/gtest.h>
+
+#include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/live/structure_job.h"
+#include "motion_model_estimation/scenes/random_object.h"
+
+namespace {
+
+mme::StructureOptions quickOptions() {
+  mme::StructureOptions o;
+  o.identify.es.threads = 1;
+  o.identify.generations = 50;
+  return o;
+}
+
+TEST(StructureJob, SelectsOnceTheWindowIsLongEnoughAndAgainOnRequest) {
+  mme::RandomObjectSpec spec;
+  spec.particles = 10;
+  spec.bond_types = 3;
+  spec.bonds = 16;
+  const mme::Model truth = mme::makeRandomObject(spec);
+  mme::Model particles = truth;
+  particles.bonds.clear();
+  particles.bond_types.clear();
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 120, truth.frame_rate_hz);
+  mme::StructureJob job(particles, quickOptions(), 100);
+  EXPECT_EQ(job.minFrames(), 100);
+  EXPECT_TRUE(job.pending());
+  EXPECT_EQ(job.status(), "pending");
+  // Too short a window: nothing runs, the request stays.
+  EXPECT_FALSE(job.runIfDue(mme::sliceFrames(data, 0, 60)).has_value());
+  EXPECT_TRUE(job.pending());
+  const std::optional<mme::StructureResult> r = job.runIfDue(data);
+  ASSERT_TRUE(r.has_value());
+  EXPECT_FALSE(job.pending());
+  EXPECT_EQ(job.status().rfind("chosen:springs", 0), 0u) << job.status();
+  EXPECT_EQ(job.selections(), 1u);
+  const mme::StructureScore score = mme::scoreStructure(truth, r->model);
+  EXPECT_GE(score.f1, 0.95);
+  EXPECT_EQ(score.types, 3);
+  // No request: nothing runs; a request runs it again.
+  EXPECT_FALSE(job.runIfDue(data).has_value());
+  job.request();
+  EXPECT_EQ(job.status(), "pending");
+  EXPECT_TRUE(job.runIfDue(data).has_value());
+  EXPECT_EQ(job.selections(), 2u);
+}
+
+TEST(StructureJob, AnUnusableWindowFailsWithTheReason) {
+  mme::RandomObjectSpec spec;
+  spec.particles = 6;
+  spec.bond_types = 2;
+  spec.bonds = 8;
+  const mme::Model truth = mme::makeRandomObject(spec);
+  mme::Model particles = truth;
+  particles.bonds.clear();
+  particles.bond_types.clear();
+  mme::Trajectory data = mme::simulateTrajectory(truth, 60, truth.frame_rate_hz);
+  // Every sample of the window occluded: no candidate pair.
+  for (auto& o : data.occluded) o = 1;
+  mme::StructureJob job(particles, quickOptions(), 10);
+  EXPECT_EQ(job.minFrames(), 35);  // selection's own minimum
+  EXPECT_FALSE(job.runIfDue(data).has_value());
+  EXPECT_EQ(job.status(), "failed");
+  EXPECT_NE(job.lastError().find("candidate"), std::string::npos) << job.lastError();
+  EXPECT_EQ(job.selections(), 0u);
+}
+
+}  // namespace
