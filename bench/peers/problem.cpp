@@ -47,10 +47,14 @@ std::string llsVerdict(const mme::Model& model) {
   for (int c = 0; c < 3; ++c)
     if (model.gravity_mps2[c].free) return "free gravity";
   for (const mme::BondType& t : model.bond_types) {
-    if (t.kind == mme::BondKind::kFlexion) return "flexion bonds (non-linear in the angle)";
-    if (t.kind == mme::BondKind::kViscosity) {
-      if (t.param(mme::kViscosity).free) return "free viscosity";
-      continue;
+    switch (t.kind) {
+      case mme::BondKind::kSpring: break;
+      case mme::BondKind::kFlexion: return "flexion bonds (non-linear in the angle)";
+      case mme::BondKind::kMuscle: return "muscles (a network of other bonds' motion)";
+      case mme::BondKind::kFloor: return "ground contact (conditional on the height)";
+      case mme::BondKind::kViscosity:
+        if (t.param(mme::kViscosity).free) return "free viscosity";
+        continue;
     }
     for (mme::ParamId id : {mme::kStiffnessNl, mme::kDampingNl})
       if (t.param(id).present && (t.param(id).free || t.value(id) != 0.0))

@@ -40,9 +40,25 @@ struct FlexionBond {
 };
 struct UnaryBond {
   int32_t p, type;
-};
+};  // viscosity and floor bonds
 struct ClampBond {
   int32_t a, b, type;
+};
+/// A muscle bond: its ends, its type, and its input bonds muscle_inputs_[input_begin, input_end).
+struct MuscleBond {
+  int32_t a, b, type;
+  uint32_t input_begin, input_end;
+};
+/// A bond a muscle reads: its ends and its type (whose rest length gives the elongation).
+struct InputBond {
+  int32_t a, b, type;
+};
+/// A muscle type's activation parameters: gain, layout, and where its network starts in
+/// LawTable::network.
+struct MuscleTypeLaw {
+  double gain_n = 0.0;
+  int32_t hidden = 0;  // the input count is the bond's (validateModel: the type's)
+  uint32_t network_offset = 0;
 };
 
 /// Current parameter values per bond type (indexed by bond type), in the inner loop's form.
@@ -52,6 +68,9 @@ struct LawTable {
   std::vector<FlexionLaw> flexion;
   std::vector<double> viscosity_nspm;    ///< unary viscosity c
   std::vector<double> max_elongation;    ///< Provot tau (only used by clamp bonds)
+  std::vector<FloorLaw> floor;           ///< ground contact
+  std::vector<MuscleTypeLaw> muscle;     ///< activation of muscle types (passive part: spring)
+  std::vector<double> network;           ///< every muscle type's network parameters, concatenated
   double gravity_mps2[3] = {0, 0, 0};
 
   void load(const Model& model);
@@ -125,6 +144,39 @@ inline void springRun(const SpringLaw& law, const PairIdx* pairs, uint32_t begin
     case 6: springRunT<true, true, false>(law, pairs, begin, end, x, v, f); break;
     default: springRunT<true, true, true>(law, pairs, begin, end, x, v, f); break;
   }
+}
+
+/// A muscle: the visco-elastic tension of its spring law plus the activation a [N].
+inline void musclePair(const SpringLaw& law, double activation_n, const double* xa,
+                       const double* xb, const double* va, const double* vb, double* fa,
+                       double* fb) {
+  const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2];
+  const double l = std::sqrt(dx * dx + dy * dy + dz * dz);
+  const double inv_l = 1.0 / std::max(l, DBL_MIN);
+  const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
+  const double t = springTension<true, false, false>(law, l, ux, uy, uz, va, vb) + activation_n;
+  const double fx = t * ux, fy = t * uy, fz = t * uz;
+  fa[0] += fx; fa[1] += fy; fa[2] += fz;
+  fb[0] -= fx; fb[1] -= fy; fb[2] -= fz;
+}
+
+/// Ground contact (FloorLaw): normal penalty force while below the plane, viscous friction.
+inline void floorForceRaw(const FloorLaw& law, const double* x, const double* v, double* f) {
+  const double penetration_m = law.height - x[2];
+  if (!(penetration_m > 0.0)) return;
+  f[0] -= law.friction * v[0];
+  f[1] -= law.friction * v[1];
+  f[2] += std::max(0.0, law.stiffness * penetration_m - law.damping * v[2]);
+}
+
+/// Elongation l - rest_length [m] and elongation speed (v_b - v_a).u [m/s] of a pair bond.
+inline void elongationRaw(double rest_length_m, const double* xa, const double* xb,
+                          const double* va, const double* vb, double* e_m, double* s_mps) {
+  const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2];
+  const double l = std::sqrt(dx * dx + dy * dy + dz * dz);
+  const double inv_l = 1.0 / std::max(l, DBL_MIN);
+  *e_m = l - rest_length_m;
+  *s_mps = ((vb[0] - va[0]) * dx + (vb[1] - va[1]) * dy + (vb[2] - va[2]) * dz) * inv_l;
 }
 
 inline double springEnergyRaw(const SpringLaw& law, const double* xa, const double* xb) {
@@ -210,9 +262,11 @@ class Engine {
   int numParticles() const { return n_; }
   size_t numSprings() const { return spring_pairs_.size(); }
   size_t numFlexions() const { return flexions_.size(); }
+  size_t numMuscles() const { return muscles_.size(); }
   const std::vector<uint8_t>& fixed() const { return fixed_; }
 
-  /// f = gravity + unary viscosity + installed springs + flexion + the given interaction runs
+  /// f = gravity + unary viscosity + installed springs + flexion + muscles + floor contacts + the
+  /// given interaction runs
   /// (pairs[run.begin..run.end) with law inter_laws[run.law]).
   void forces(const LawTable& laws, const double* x, const double* v, double* f,
               const SpringLaw* inter_laws, const PairIdx* inter_pairs,
@@ -234,7 +288,12 @@ class Engine {
   std::vector<SpringRun> spring_runs_;
   std::vector<FlexionBond> flexions_;
   std::vector<UnaryBond> unary_;
+  std::vector<UnaryBond> floors_;  // in bond order
   std::vector<ClampBond> clamps_;  // in bond order
+  std::vector<MuscleBond> muscles_;      // in bond order
+  std::vector<InputBond> muscle_inputs_;
+
+  void muscleForces(const LawTable& laws, const double* x, const double* v, double* f) const;
 };
 
 }  // namespace detail

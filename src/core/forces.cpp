@@ -13,6 +13,11 @@ void addSpringForce(const SpringLaw& law, const Eigen::Vector3d& xa, const Eigen
                                        fa->data(), fb->data());
 }
 
+void addFloorForce(const FloorLaw& law, const Eigen::Vector3d& x, const Eigen::Vector3d& v,
+                   Eigen::Vector3d* f) {
+  detail::floorForceRaw(law, x.data(), v.data(), f->data());
+}
+
 double springEnergy(const SpringLaw& law, const Eigen::Vector3d& xa, const Eigen::Vector3d& xb) {
   return detail::springEnergyRaw(law, xa.data(), xb.data());
 }

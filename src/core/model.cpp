@@ -3,52 +3,15 @@
 #include <cmath>
 #include <sstream>
 
+#include "motion_model_estimation/core/muscle.h"
+
 namespace mme {
 
-const char* paramKey(ParamId id) {
-  switch (id) {
-    case kStiffness: return "stiffness";
-    case kRestLength: return "rest_length";
-    case kDamping: return "damping";
-    case kStiffnessNl: return "stiffness_nl";
-    case kDampingNl: return "damping_nl";
-    case kMinDistance: return "min_distance";
-    case kMaxDistance: return "max_distance";
-    case kMaxElongation: return "max_elongation";
-    case kRestAngle: return "rest_angle";
-    case kViscosity: return "viscosity";
-    default: return "?";
-  }
-}
+const std::vector<ParamId>& paramsOfKind(BondKind kind) { return bondKindInfo(kind).params; }
 
-const std::vector<ParamId>& paramsOfKind(BondKind kind) {
-  static const std::vector<ParamId> kSpringParams = {
-      kStiffness, kRestLength, kDamping, kStiffnessNl, kDampingNl,
-      kMinDistance, kMaxDistance, kMaxElongation};
-  static const std::vector<ParamId> kFlexionParams = {kStiffness, kRestAngle, kDamping};
-  static const std::vector<ParamId> kViscosityParams = {kViscosity};
-  switch (kind) {
-    case BondKind::kSpring: return kSpringParams;
-    case BondKind::kFlexion: return kFlexionParams;
-    default: return kViscosityParams;
-  }
-}
+const char* kindName(BondKind kind) { return bondKindInfo(kind).name; }
 
-const char* kindName(BondKind kind) {
-  switch (kind) {
-    case BondKind::kSpring: return "spring";
-    case BondKind::kFlexion: return "flexion";
-    default: return "viscosity";
-  }
-}
-
-int kindArity(BondKind kind) {
-  switch (kind) {
-    case BondKind::kSpring: return 2;
-    case BondKind::kFlexion: return 3;
-    default: return 1;
-  }
-}
+int kindArity(BondKind kind) { return bondKindInfo(kind).arity; }
 
 int Model::particleIndex(const std::string& name) const {
   for (size_t i = 0; i < particles.size(); ++i)
@@ -59,6 +22,13 @@ int Model::particleIndex(const std::string& name) const {
 int Model::bondTypeIndex(const std::string& name) const {
   for (size_t i = 0; i < bond_types.size(); ++i)
     if (bond_types[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+int Model::bondIndex(const std::string& name) const {
+  if (name.empty()) return -1;
+  for (size_t i = 0; i < bonds.size(); ++i)
+    if (bonds[i].name == name) return static_cast<int>(i);
   return -1;
 }
 
@@ -80,6 +50,14 @@ std::vector<ParamRef> collect(const Model& model, bool free_only) {
       if (!p.present || (free_only && !p.free)) continue;
       refs.push_back({type.name + "/" + paramKey(id), static_cast<int>(t), id});
     }
+    for (size_t k = 0; k < type.network.size(); ++k) {
+      const Param& p = type.network[k];
+      if (!p.present || (free_only && !p.free)) continue;
+      refs.push_back({type.name + "/" +
+                          muscleNetworkKey(type.network_inputs, type.network_hidden,
+                                           static_cast<int>(k)),
+                      static_cast<int>(t), kParamCount + static_cast<int>(k)});
+    }
   }
   for (int k = 0; k < 3; ++k) {
     const Param& p = model.gravity_mps2[k];
@@ -94,13 +72,15 @@ std::vector<ParamRef> freeParameters(const Model& model) { return collect(model,
 std::vector<ParamRef> presentParameters(const Model& model) { return collect(model, false); }
 
 Param& paramOf(Model& model, const ParamRef& ref) {
-  return ref.bond_type < 0 ? model.gravity_mps2[ref.param]
-                           : model.bond_types[ref.bond_type].params[ref.param];
+  if (ref.bond_type < 0) return model.gravity_mps2[ref.param];
+  BondType& type = model.bond_types[ref.bond_type];
+  return ref.isNetwork() ? type.network[ref.param - kParamCount] : type.params[ref.param];
 }
 
 const Param& paramOf(const Model& model, const ParamRef& ref) {
-  return ref.bond_type < 0 ? model.gravity_mps2[ref.param]
-                           : model.bond_types[ref.bond_type].params[ref.param];
+  if (ref.bond_type < 0) return model.gravity_mps2[ref.param];
+  const BondType& type = model.bond_types[ref.bond_type];
+  return ref.isNetwork() ? type.network[ref.param - kParamCount] : type.params[ref.param];
 }
 
 double getParam(const Model& model, const ParamRef& ref) { return paramOf(model, ref).value; }
@@ -162,26 +142,82 @@ std::string validateModel(const Model& model) {
         }
     }
   }
+  for (size_t b = 0; b < model.bonds.size(); ++b) {
+    const Bond& bond = model.bonds[b];
+    const std::string bond_name =
+        bond.name.empty() ? "bond " + std::to_string(b) : "bond '" + bond.name + "'";
+    if (!bond.name.empty())
+      for (size_t c = 0; c < b; ++c)
+        if (model.bonds[c].name == bond.name) return "duplicate bond name '" + bond.name + "'";
+    const BondType& type = model.bond_types[bond.type];
+    if (!bondKindInfo(type.kind).network) {
+      if (!bond.inputs.empty())
+        return bond_name + ": only muscle bonds have inputs (type '" + type.name + "' is a " +
+               kindName(type.kind) + ")";
+      continue;
+    }
+    if (static_cast<int>(bond.inputs.size()) != type.network_inputs)
+      return bond_name + ": muscle type '" + type.name + "' reads " +
+             std::to_string(type.network_inputs) + " input bond(s), the bond names " +
+             std::to_string(bond.inputs.size());
+    for (int in : bond.inputs) {
+      if (in < 0 || in >= static_cast<int>(model.bonds.size()))
+        return bond_name + ": input bond index out of range";
+      if (in == static_cast<int>(b)) return bond_name + ": a muscle cannot read its own bond";
+      const BondType& in_type = model.bond_types[model.bonds[in].type];
+      if (!bondKindInfo(in_type.kind).has_elongation)
+        return bond_name + ": input bond " + std::to_string(in) + " is a " +
+               kindName(in_type.kind) + " (inputs must be springs or muscles: bonds with an elongation)";
+      if (model.bonds[in].name.empty())
+        return bond_name + ": input bond " + std::to_string(in) + " has no name";
+    }
+  }
   for (size_t t = 0; t < model.interactions.size(); ++t) {
     const Interaction& in = model.interactions[t];
     if (in.type < 0 || in.type >= static_cast<int>(model.bond_types.size()))
       return "interaction: unknown bond type";
     const BondType& type = model.bond_types[in.type];
-    if (type.kind != BondKind::kSpring)
+    if (!bondKindInfo(type.kind).interactions)
       return "interaction type '" + type.name + "' must be a spring";
     if (!type.param(kMaxDistance).present)
       return "interaction type '" + type.name + "' needs max_distance";
   }
   for (const BondType& type : model.bond_types) {
-    for (ParamId id : paramsOfKind(type.kind)) {
-      const Param& p = type.params[id];
-      if (!p.present) continue;
+    const auto check = [&type](const Param& p, const std::string& key) -> std::string {
+      if (!p.present) return "";
       if (p.has_value && !std::isfinite(p.value))
-        return "bond type '" + type.name + "': " + paramKey(id) + " must be finite";
+        return "bond type '" + type.name + "': " + key + " must be finite";
       if (p.has_min && p.has_max && p.min > p.max)
-        return "bond type '" + type.name + "': " + paramKey(id) + " has min > max";
+        return "bond type '" + type.name + "': " + key + " has min > max";
       if (!p.free && !p.has_value)
-        return "bond type '" + type.name + "': " + paramKey(id) + " is fixed but has no value";
+        return "bond type '" + type.name + "': " + key + " is fixed but has no value";
+      return "";
+    };
+    for (ParamId id : paramsOfKind(type.kind)) {
+      const std::string reason = check(type.params[id], paramKey(id));
+      if (!reason.empty()) return reason;
+    }
+    if (!bondKindInfo(type.kind).network) {
+      if (!type.network.empty() || type.network_inputs != 0 || type.network_hidden != 0)
+        return "bond type '" + type.name + "': only muscles have a network";
+      continue;
+    }
+    if (type.network_inputs < 0 || type.network_inputs > kMaxMuscleInputs)
+      return "bond type '" + type.name + "': inputs must be in [0, " +
+             std::to_string(kMaxMuscleInputs) + "]";
+    if (type.network_hidden < 0 || type.network_hidden > kMaxMuscleHidden)
+      return "bond type '" + type.name + "': hidden must be in [0, " +
+             std::to_string(kMaxMuscleHidden) + "]";
+    if (static_cast<int>(type.network.size()) !=
+        muscleNetworkSize(type.network_inputs, type.network_hidden))
+      return "bond type '" + type.name + "': the network has " +
+             std::to_string(type.network.size()) + " parameters, its layout needs " +
+             std::to_string(muscleNetworkSize(type.network_inputs, type.network_hidden));
+    for (size_t k = 0; k < type.network.size(); ++k) {
+      const std::string reason = check(
+          type.network[k],
+          muscleNetworkKey(type.network_inputs, type.network_hidden, static_cast<int>(k)));
+      if (!reason.empty()) return reason;
     }
   }
   return "";

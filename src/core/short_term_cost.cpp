@@ -229,6 +229,10 @@ ShortTermCost::ShortTermCost(const Model& model, const Trajectory& trajectory)
     for (int p = 0; p < arity; ++p)
       for (int q = 0; q < arity; ++q)
         if (p != q) adj_lists[b.particles[p]].push_back(b.particles[q]);
+    // A muscle's force depends on its input bonds' ends: one hop from them to its own ends.
+    for (int in : b.inputs)
+      for (int p = 0; p < kindArity(model.bond_types[model.bonds[in].type].kind); ++p)
+        for (int q = 0; q < arity; ++q) adj_lists[model.bonds[in].particles[p]].push_back(b.particles[q]);
   }
   // Groups involved in interactions, and for each such group its partner groups.
   std::map<std::string, std::vector<int>> group_members;
@@ -371,7 +375,7 @@ ShortTermCost::ShortTermCost(const Model& model, const Trajectory& trajectory)
     }
     w.run_end = static_cast<uint32_t>(m.inter_runs.size());
     w.margin_m = m.substeps > 1 ? margin_all_m : 0.0;
-    w.fixed_evals = static_cast<uint64_t>(m.substeps) * (m.engine.numSprings() + m.engine.numFlexions());
+    w.fixed_evals = static_cast<uint64_t>(m.substeps) * (m.engine.numSprings() + m.engine.numFlexions() + m.engine.numMuscles());
     w.bond_evals = w.fixed_evals + static_cast<uint64_t>(m.substeps) * candidates;
     m.bond_evals += w.bond_evals;
     m.terms += w.valid_end - w.valid_begin;

@@ -8,6 +8,7 @@
 
 #include "engine.h"
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/muscle.h"
 #include "motion_model_estimation/core/spatial_grid.h"
 
 namespace mme {
@@ -40,6 +41,15 @@ SpringLaw springLawOf(const BondType& type) {
   return law;
 }
 
+FloorLaw floorLawOf(const BondType& type) {
+  FloorLaw law;
+  law.stiffness = type.value(kStiffness);
+  law.damping = type.value(kDamping);
+  law.friction = type.value(kFriction);
+  law.height = type.value(kHeight);
+  return law;
+}
+
 FlexionLaw flexionLawOf(const BondType& type) {
   FlexionLaw law;
   law.stiffness = type.value(kStiffness);
@@ -54,12 +64,23 @@ void LawTable::load(const Model& model) {
   flexion.assign(nt, FlexionLaw());
   viscosity_nspm.assign(nt, 0.0);
   max_elongation.assign(nt, 0.0);
+  floor.assign(nt, FloorLaw());
+  muscle.assign(nt, MuscleTypeLaw());
+  network.clear();
+  // Every law form of every type is filled (absent parameters read 0): a kind only reads its
+  // own form, and this stays independent of the kind.
   for (size_t t = 0; t < nt; ++t) {
     const BondType& type = model.bond_types[t];
     spring[t] = springLawOf(type);
     flexion[t] = flexionLawOf(type);
+    floor[t] = floorLawOf(type);
     viscosity_nspm[t] = type.value(kViscosity);
     max_elongation[t] = type.value(kMaxElongation);
+    MuscleTypeLaw& m = muscle[t];
+    m.gain_n = type.value(kGain);
+    m.hidden = type.network_hidden;
+    m.network_offset = static_cast<uint32_t>(network.size());
+    for (const Param& p : type.network) network.push_back(p.present ? p.value : 0.0);
   }
   const Eigen::Vector3d g = model.gravity();
   for (int k = 0; k < 3; ++k) gravity_mps2[k] = g[k];
@@ -71,14 +92,19 @@ void LawTable::set(const ParamRef& ref, double value) {
     return;
   }
   const size_t t = static_cast<size_t>(ref.bond_type);
+  if (ref.isNetwork()) {
+    network[muscle[t].network_offset + static_cast<uint32_t>(ref.param - kParamCount)] = value;
+    return;
+  }
   SpringLaw& s = spring[t];
   FlexionLaw& fl = flexion[t];
-  // A parameter id means the same thing in both law forms where both have it; writing both
-  // keeps this independent of the type's kind (the unused form is never read).
-  switch (ref.param) {
-    case kStiffness: s.stiffness = value; fl.stiffness = value; break;
+  FloorLaw& fc = floor[t];
+  // A parameter id means the same thing in every law form that has it; writing them all keeps
+  // this independent of the type's kind (the unused forms are never read).
+  switch (static_cast<ParamId>(ref.param)) {
+    case kStiffness: s.stiffness = value; fl.stiffness = value; fc.stiffness = value; break;
     case kRestLength: s.rest_length = value; break;
-    case kDamping: s.damping = value; fl.damping = value; break;
+    case kDamping: s.damping = value; fl.damping = value; fc.damping = value; break;
     case kStiffnessNl: s.stiffness_nl = value; break;
     case kDampingNl: s.damping_nl = value; break;
     case kMinDistance: s.min_distance = value; break;
@@ -86,7 +112,10 @@ void LawTable::set(const ParamRef& ref, double value) {
     case kMaxElongation: max_elongation[t] = value; break;
     case kRestAngle: fl.rest_angle = value; break;
     case kViscosity: viscosity_nspm[t] = value; break;
-    default: break;
+    case kGain: muscle[t].gain_n = value; break;
+    case kFriction: fc.friction = value; break;
+    case kHeight: fc.height = value; break;
+    case kParamCount: break;  // not a parameter (network parameters are handled above)
   }
 }
 
@@ -126,11 +155,42 @@ Engine::Engine(const Model& model) {
         flexions_.push_back({b.particles[0], b.particles[1], b.particles[2], b.type});
         break;
       case BondKind::kViscosity: unary_.push_back({b.particles[0], b.type}); break;
+      case BondKind::kFloor: floors_.push_back({b.particles[0], b.type}); break;
       case BondKind::kSpring:
         if (type.param(kMaxElongation).present)
           clamps_.push_back({b.particles[0], b.particles[1], b.type});
         break;
+      case BondKind::kMuscle: {
+        MuscleBond m{b.particles[0], b.particles[1], b.type,
+                     static_cast<uint32_t>(muscle_inputs_.size()), 0};
+        for (int in : b.inputs) {
+          const Bond& ib = model.bonds[in];
+          muscle_inputs_.push_back({ib.particles[0], ib.particles[1], ib.type});
+        }
+        m.input_end = static_cast<uint32_t>(muscle_inputs_.size());
+        muscles_.push_back(m);
+        break;
+      }
     }
+  }
+}
+
+void Engine::muscleForces(const LawTable& laws, const double* x, const double* v,
+                          double* f) const {
+  double z[2 * kMaxMuscleInputs];  // validateModel bounds the input count
+  for (const MuscleBond& m : muscles_) {
+    const MuscleTypeLaw& law = laws.muscle[m.type];
+    const int n_in = static_cast<int>(m.input_end - m.input_begin);
+    for (int k = 0; k < n_in; ++k) {
+      const InputBond& ib = muscle_inputs_[m.input_begin + k];
+      const int a = 3 * ib.a, b = 3 * ib.b;
+      elongationRaw(laws.spring[ib.type].rest_length, x + a, x + b, v + a, v + b, &z[k],
+                    &z[n_in + k]);
+    }
+    const double activation_n = muscleActivation(laws.network.data() + law.network_offset,
+                                                 n_in, law.hidden, law.gain_n, z);
+    const int a = 3 * m.a, b = 3 * m.b;
+    musclePair(laws.spring[m.type], activation_n, x + a, x + b, v + a, v + b, f + a, f + b);
   }
 }
 
@@ -157,6 +217,11 @@ void Engine::forces(const LawTable& laws, const double* x, const double* v, doub
     const int a = 3 * b.a, m = 3 * b.b, c = 3 * b.c;
     flexionForceRaw(laws.flexion[b.type], x + a, x + m, x + c, v + a, v + m, v + c, f + a, f + m,
                     f + c);
+  }
+  if (!muscles_.empty()) muscleForces(laws, x, v, f);
+  for (const UnaryBond& u : floors_) {
+    const int p = 3 * u.p;
+    floorForceRaw(laws.floor[u.type], x + p, v + p, f + p);
   }
   for (size_t r = 0; r < num_inter_runs; ++r) {
     const SpringRun& run = inter_runs[r];
@@ -203,6 +268,9 @@ double Engine::bondEnergy(const LawTable& laws, const double* x) const {
                            x + 3 * spring_pairs_[k].b);
   for (const FlexionBond& b : flexions_)
     e += flexionEnergyRaw(laws.flexion[b.type], x + 3 * b.a, x + 3 * b.b, x + 3 * b.c);
+  // A muscle's passive part only: its activation is a driving force, not a potential.
+  for (const MuscleBond& m : muscles_)
+    e += springEnergyRaw(laws.spring[m.type], x + 3 * m.a, x + 3 * m.b);
   return e;
 }
 

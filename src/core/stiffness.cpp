@@ -15,7 +15,8 @@ double stiffestModeRadPerS(const Model& model, const std::vector<Eigen::Vector3d
   std::vector<Block> blocks;
   for (const Bond& bond : model.bonds) {
     const BondType& type = model.bond_types[bond.type];
-    if (type.kind != BondKind::kSpring) continue;
+    // Pair bonds with a stiffness; a muscle's activation is a driving force, not a stiffness.
+    if (!bondKindInfo(type.kind).has_elongation) continue;
     const int a = bond.particles[0], b = bond.particles[1];
     const Eigen::Vector3d d = x_m[b] - x_m[a];
     const double l = d.norm();

@@ -127,43 +127,84 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
       continue;
     }
     const BondType& type = model.bond_types[r.bond_type];
-    const bool spring = type.kind == BondKind::kSpring, flexion = type.kind == BondKind::kFlexion;
-    const int rest_param = spring ? kRestLength : kRestAngle;
     TypeColumns& tc = types[r.bond_type];
-    if (r.param == kStiffness && (spring || flexion)) {
-      tc.k = static_cast<int>(columns.size());
-      columns.push_back({static_cast<int>(k), Role::kDirect});
-    } else if (r.param == rest_param && (spring || flexion)) {
-      const bool cubic = spring && (type.value(kStiffnessNl) != 0.0 || type.param(kStiffnessNl).free);
-      const bool linearizable = cubic && options.linearize_rest_length && type.param(kStiffness).free &&
-                                type.param(kStiffnessNl).free && type.param(kRestLength).has_value;
-      if (cubic && !linearizable) {
-        out.reason = "'" + r.name + "' enters non-linearly (the type has a cubic stiffness_nl)";
-        return out;
+    bool linear = false;
+    switch (type.kind) {
+      case BondKind::kSpring:
+      case BondKind::kFlexion: {
+        const bool spring = type.kind == BondKind::kSpring;
+        const int rest_param = spring ? kRestLength : kRestAngle;
+        if (r.param == kStiffness) {
+          tc.k = static_cast<int>(columns.size());
+          columns.push_back({static_cast<int>(k), Role::kDirect});
+          linear = true;
+        } else if (r.param == rest_param) {
+          const bool cubic =
+              spring && (type.value(kStiffnessNl) != 0.0 || type.param(kStiffnessNl).free);
+          const bool linearizable = cubic && options.linearize_rest_length &&
+                                    type.param(kStiffness).free && type.param(kStiffnessNl).free &&
+                                    type.param(kRestLength).has_value;
+          if (cubic && !linearizable) {
+            out.reason = "'" + r.name + "' enters non-linearly (the type has a cubic stiffness_nl)";
+            return out;
+          }
+          linear = true;  // its column is decided below, once the stiffness' column is known
+        } else if (r.param == kDamping) {
+          tc.damping = static_cast<int>(columns.size());
+          columns.push_back({static_cast<int>(k), Role::kDirect});
+          linear = true;
+        } else if (r.param == kStiffnessNl && spring &&
+                   (!type.param(kRestLength).free || options.linearize_rest_length)) {
+          tc.stiffness_nl = static_cast<int>(columns.size());  // k_nl (l - L)^3, L known (or L0)
+          columns.push_back({static_cast<int>(k), Role::kDirect});
+          linear = true;
+        } else if (r.param == kDampingNl && spring) {
+          tc.damping_nl = static_cast<int>(columns.size());    // c_nl s |s|
+          columns.push_back({static_cast<int>(k), Role::kDirect});
+          linear = true;
+        }
+        break;
       }
-      // Decided below, once the stiffness' column is known.
-    } else if (r.param == kDamping && (spring || flexion)) {
-      tc.damping = static_cast<int>(columns.size());
-      columns.push_back({static_cast<int>(k), Role::kDirect});
-    } else if (r.param == kViscosity) {
-      tc.viscosity = static_cast<int>(columns.size());
-      columns.push_back({static_cast<int>(k), Role::kDirect});
-    } else if (r.param == kStiffnessNl && spring &&
-               (!type.param(kRestLength).free || options.linearize_rest_length)) {
-      tc.stiffness_nl = static_cast<int>(columns.size());  // k_nl (l - L)^3, L known (or L0)
-      columns.push_back({static_cast<int>(k), Role::kDirect});
-    } else if (r.param == kDampingNl && spring) {
-      tc.damping_nl = static_cast<int>(columns.size());    // c_nl s |s|
-      columns.push_back({static_cast<int>(k), Role::kDirect});
-    } else {
+      case BondKind::kViscosity:
+        if (r.param == kViscosity) {
+          tc.viscosity = static_cast<int>(columns.size());
+          columns.push_back({static_cast<int>(k), Role::kDirect});
+          linear = true;
+        }
+        break;
+      case BondKind::kMuscle:
+        // The activation is a network of other bonds' motion: every free muscle parameter is
+        // left to the evolution strategy and the refinements (README "Muscles").
+        break;
+      case BondKind::kFloor:  // conditional on contact: left to the search too
+        break;
+    }
+    if (!linear) {
       out.reason = "'" + r.name + "' does not enter the forces linearly";
       return out;
     }
   }
+  // A muscle's activation reads its input bonds' elongations: with a free rest length there
+  // the known forces below (free values set to 0) would be wrong.
+  for (const Bond& b : model.bonds)
+    for (int in : b.inputs) {
+      const BondType& in_type = model.bond_types[model.bonds[in].type];
+      if (in_type.param(kRestLength).free) {
+        out.reason = "'" + in_type.name + "/rest_length' is free and read by a muscle's network";
+        return out;
+      }
+    }
   for (size_t t = 0; t < model.bond_types.size(); ++t) {
     const BondType& type = model.bond_types[t];
-    if (type.kind == BondKind::kViscosity) continue;
-    const int rest = freeIndex(static_cast<int>(t), type.kind == BondKind::kSpring ? kRestLength : kRestAngle);
+    int rest_param = -1;
+    switch (type.kind) {
+      case BondKind::kSpring: rest_param = kRestLength; break;
+      case BondKind::kFlexion: rest_param = kRestAngle; break;
+      case BondKind::kViscosity:
+      case BondKind::kMuscle:
+      case BondKind::kFloor: continue;  // no rest parameter solved for
+    }
+    const int rest = freeIndex(static_cast<int>(t), rest_param);
     if (rest < 0) continue;
     TypeColumns& tc = types[t];
     if (tc.stiffness_nl >= 0) {  // linearised (checked above)
@@ -207,6 +248,9 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
     for (int p = 0; p < arity; ++p)
       for (int q = 0; q < arity; ++q)
         if (p != q) needs[b.particles[p]].push_back(b.particles[q]);
+    for (int in : b.inputs)  // a muscle's ends also need its input bonds' ends
+      for (int p = 0; p < arity; ++p)
+        for (int q = 0; q < 2; ++q) needs[b.particles[p]].push_back(model.bonds[in].particles[q]);
   }
   State state;
   state.x_m.resize(n);
@@ -235,7 +279,8 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
     for (const Bond& b : model.bonds) {
       const BondType& type = model.bond_types[b.type];
       const TypeColumns& tc = types[b.type];
-      if (type.kind == BondKind::kSpring) {
+      switch (type.kind) {
+      case BondKind::kSpring: {
         const int a = b.particles[0], c = b.particles[1];
         const Eigen::Vector3d d = state.x_m[c] - state.x_m[a];
         const double l = d.norm();
@@ -269,7 +314,9 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
           pair(tc.stiffness_nl, e * e * e);
         }
         pair(tc.damping_nl, s * std::fabs(s));
-      } else if (type.kind == BondKind::kFlexion) {
+        break;
+      }
+      case BondKind::kFlexion: {
         const int a = b.particles[0], v = b.particles[1], c = b.particles[2];
         const double theta = flexionAngle(state.x_m[a], state.x_m[v], state.x_m[c]);
         // grad(theta) at each particle: the force of a law whose torque is exactly 1.
@@ -296,8 +343,14 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
           torque(tc.rest, k);
         }
         torque(tc.damping, -theta_dot);
-      } else {  // viscosity: F = -c v
+        break;
+      }
+      case BondKind::kViscosity:  // F = -c v
         add(b.particles[0], tc.viscosity, -state.v_mps[b.particles[0]]);
+        break;
+      case BondKind::kMuscle:  // no unknowns: its force is in known_force
+      case BondKind::kFloor:
+        break;
       }
     }
     for (int i = 0; i < n; ++i) {

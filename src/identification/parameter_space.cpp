@@ -5,6 +5,7 @@
 #include <set>
 
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/muscle.h"
 
 namespace mme {
 
@@ -14,7 +15,27 @@ bool isLengthLike(int param) {
   return param == kRestLength || param == kMinDistance || param == kMaxDistance;
 }
 
-bool isPositivePhysical(int param) { return param != kRestAngle; }
+/// Network weights and biases are signed; the muscle gain is positive (its sign would mirror
+/// the output weights'), so it is searched in log space like other magnitudes.
+bool isPositivePhysical(int param) {
+  return param != kRestAngle && param != kHeight && param < kParamCount;
+}
+
+/// Default half-width of a floor height's search range around its guess (or 0) [m].
+constexpr double kFloorHeightRange_m = 1.0;
+
+/// Default search range of a muscle's network parameter (README "Muscles"): weights read
+/// elongations of centimetres, so +-100 [1/m] (or [s/m]) reaches tanh's saturation; biases
+/// beyond +-5 only saturate.
+constexpr double kNetworkWeightBound = 100.0;
+constexpr double kNetworkBiasBound = 5.0;
+
+bool isNetworkBias(const Model& model, const ParamRef& ref) {
+  const BondType& type = model.bond_types[ref.bond_type];
+  const std::string key = muscleNetworkKey(type.network_inputs, type.network_hidden,
+                                           ref.param - kParamCount);
+  return key[0] == 'b';
+}
 
 /// Initial std of a clamp-length gene (ln scale) around the longest observed bond.
 constexpr double kClampInitSpread = 1e-3;
@@ -24,7 +45,7 @@ constexpr double kClampInitSpread = 1e-3;
 template <class Visit>
 void forEachObservedLength(const Model& model, const Trajectory& trajectory, int type,
                            const Visit& visit) {
-  if (model.bond_types[type].kind != BondKind::kSpring) return;
+  if (!bondKindInfo(model.bond_types[type].kind).has_elongation) return;
   for (const Bond& bond : model.bonds) {
     if (bond.type != type) continue;
     const int a = bond.particles[0], b = bond.particles[1];
@@ -110,6 +131,13 @@ ParameterSpace::ParameterSpace(const Model& model, const Trajectory& trajectory)
       lo = 0.0; hi = M_PI;
     } else if (ref.param == kMaxElongation) {
       lo = 1e-3; hi = 10.0;
+    } else if (ref.param == kHeight) {
+      const double guess = p.has_value ? p.value : 0.0;
+      lo = guess - kFloorHeightRange_m;
+      hi = guess + kFloorHeightRange_m;
+    } else if (ref.isNetwork()) {
+      hi = isNetworkBias(model, ref) ? kNetworkBiasBound : kNetworkWeightBound;
+      lo = -hi;
     } else if (isLengthLike(ref.param)) {
       const double scale = observed > 0.0 ? observed : (p.has_value && p.value > 0 ? p.value : 1.0);
       lo = scale / 3.0; hi = scale * 3.0;

@@ -649,6 +649,9 @@ Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, i
         counter = &of_kind[2];
         type.param(kViscosity).value = mu[0];
         break;
+      case BondKind::kMuscle:  // never a candidate: candidates are springs, flexions, drags
+      case BondKind::kFloor:
+        break;
     }
     std::snprintf(name, sizeof(name), "%s%02d", prefix, (*counter)++);
     type.name = name;
@@ -868,6 +871,12 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
   if (!model.interactions.empty())
     throw InputError("structure selection: the model has interactions (bonds found on the fly); "
                      "give the particles and fixed bonds only");
+  // Pruning renumbers bonds, which a muscle's input list would not follow; and a muscle's
+  // network is not linear, so the equation error this selection rests on cannot weigh it.
+  for (const BondType& type : model.bond_types)
+    if (bondKindInfo(type.kind).network)
+      throw InputError("structure selection: the model has muscles (type '" + type.name +
+                       "'); select the passive structure first, then add the muscles");
   const int frames = data.numFrames();
   const int held_frames = std::max(15, static_cast<int>(std::lround(options.held_out_share * frames)));
   const int fit_frames = frames - held_frames;

@@ -42,6 +42,7 @@
 #include <utility>
 
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/muscle.h"
 
 namespace mme {
 
@@ -409,40 +410,63 @@ class Loader {
                  std::to_string(pos->second) + ")" + where);
       where = " in bond type '" + type.name + "'";
 
-      if (!kind) fail(lineOf(item), "kind", "bond type has no kind (spring, flexion or viscosity)" + where);
+      if (!kind)
+        fail(lineOf(item), "kind", "bond type has no kind (" + bondKindNameList() + ")" + where);
       const std::string k = asString(*kind, "kind", where);
-      if (k == "spring") {
-        type.kind = BondKind::kSpring;
-      } else if (k == "flexion") {
-        type.kind = BondKind::kFlexion;
-      } else if (k == "viscosity") {
-        type.kind = BondKind::kViscosity;
-      } else if (k == "muscle") {
-        fail(kind->valueLine(), "kind", "muscles are not supported yet" + where);
-      } else {
+      const BondKindInfo* info = bondKindByName(k);
+      if (!info)
         fail(kind->valueLine(), "kind",
-             "unknown kind '" + k + "' (expected spring, flexion or viscosity)" + where);
-      }
+             "unknown kind '" + k + "' (expected " + bondKindNameList() + ")" + where);
+      type.kind = info->kind;
 
-      const std::vector<ParamId>& allowed = paramsOfKind(type.kind);
+      // A muscle's network layout first: it decides which parameter keys exist.
+      if (info->network) {
+        for (const Entry& e : es) {
+          if (e.key == "inputs") type.network_inputs = asCount(e, kMaxMuscleInputs, where);
+          if (e.key == "hidden") type.network_hidden = asCount(e, kMaxMuscleHidden, where);
+        }
+        type.network.assign(muscleNetworkSize(type.network_inputs, type.network_hidden), Param());
+      }
+      const std::vector<ParamId>& allowed = info->params;
       for (const Entry& e : es) {
         if (e.key == "name" || e.key == "kind") continue;
+        if (info->network && (e.key == "inputs" || e.key == "hidden")) continue;
         bool found = false;
         for (ParamId id : allowed) {
           if (e.key != paramKey(id)) continue;
           type.params[id] = readParam(e, where);
           found = true;
         }
+        if (!found && info->network) {
+          const int index = muscleNetworkIndex(type.network_inputs, type.network_hidden, e.key);
+          if (index >= 0) {
+            type.network[index] = readParam(e, where);
+            found = true;
+          }
+        }
         if (!found) {
           std::string list_of;
           for (ParamId id : allowed) list_of += std::string(list_of.empty() ? "" : ", ") + paramKey(id);
+          if (info->network)
+            list_of += ", inputs, hidden, and the network's " +
+                       muscleNetworkLayout(type.network_inputs, type.network_hidden) +
+                       " (inputs " + std::to_string(type.network_inputs) + ", hidden " +
+                       std::to_string(type.network_hidden) + ")";
           fail(lineOf(e.key_node), e.key,
-               std::string("unknown key for a ") + kindName(type.kind) + where + " (allowed: name, kind, " +
+               std::string("unknown key for a ") + info->name + where + " (allowed: name, kind, " +
                    list_of + ")");
         }
       }
       model.bond_types.push_back(std::move(type));
     }
+  }
+
+  /// A non-negative integer no larger than `max` (a muscle's inputs and hidden units).
+  int asCount(const Entry& e, int max, const std::string& where) const {
+    const int v = asInt(e, e.key, where);
+    if (v < 0 || v > max)
+      fail(e.valueLine(), e.key, "must be in [0, " + std::to_string(max) + "]" + where);
+    return v;
   }
 
   /// A parameter: a plain number (present, fixed) or a block {value, free, min, max, std}.
@@ -486,6 +510,15 @@ class Loader {
 
   void readBonds(const Entry& list, Model& model) {
     const YAML::Node& seq = sequence(list);
+    // Muscle inputs name bonds that may come later in the list: resolved after all are read.
+    struct PendingInputs {
+      std::size_t bond;
+      const Entry* entry;
+      std::string where;
+    };
+    std::vector<std::vector<Entry>> all_entries(seq.size());
+    std::vector<PendingInputs> pending;
+    std::map<std::string, int> name_line;
     for (std::size_t i = 0; i < seq.size(); ++i) {
       const YAML::Node item = seq[i];
       const std::string where = " in bonds[" + std::to_string(i) + "]";
@@ -493,14 +526,22 @@ class Loader {
         fail(lineOf(item), "bonds", "each bond must be a map {type, particles}" + where);
       const Entry* type_e = nullptr;
       const Entry* parts_e = nullptr;
-      const std::vector<Entry> es = entries(item, "bonds", where);
+      const Entry* name_e = nullptr;
+      const Entry* inputs_e = nullptr;
+      all_entries[i] = entries(item, "bonds", where);
+      const std::vector<Entry>& es = all_entries[i];
       for (const Entry& e : es) {
         if (e.key == "type") {
           type_e = &e;
         } else if (e.key == "particles") {
           parts_e = &e;
+        } else if (e.key == "name") {
+          name_e = &e;
+        } else if (e.key == "inputs") {
+          inputs_e = &e;
         } else {
-          fail(lineOf(e.key_node), e.key, "unknown key" + where + " (allowed: type, particles)");
+          fail(lineOf(e.key_node), e.key,
+               "unknown key" + where + " (allowed: type, particles, name, inputs)");
         }
       }
       if (!type_e) fail(lineOf(item), "type", "bond type missing" + where);
@@ -531,7 +572,55 @@ class Loader {
                  "bond joins particle '" + n.Scalar() + "' to itself" + where);
         bond.particles[k] = idx;
       }
+      if (name_e) {
+        bond.name = asString(*name_e, "name", where);
+        if (bond.name.empty()) fail(name_e->valueLine(), "name", "must not be empty" + where);
+        auto [pos, inserted] = name_line.emplace(bond.name, name_e->valueLine());
+        if (!inserted)
+          fail(name_e->valueLine(), "name",
+               "duplicate bond name '" + bond.name + "' (first at line " +
+                   std::to_string(pos->second) + ")" + where);
+      }
+      if (bondKindInfo(type.kind).network) {
+        if (!inputs_e)
+          fail(lineOf(item), "inputs",
+               "a muscle bond (type '" + type.name + "') names its " +
+                   std::to_string(type.network_inputs) + " input bond(s): inputs: [bond names]" +
+                   where);
+        pending.push_back({model.bonds.size(), inputs_e, where});
+      } else if (inputs_e) {
+        fail(lineOf(inputs_e->key_node), "inputs",
+             std::string("only muscle bonds have inputs (type '") + type.name + "' is a " +
+                 kindName(type.kind) + ")" + where);
+      }
       model.bonds.push_back(bond);
+    }
+    for (const PendingInputs& p : pending) {
+      Bond& bond = model.bonds[p.bond];
+      const BondType& type = model.bond_types[bond.type];
+      const YAML::Node& names = p.entry->value;
+      if (!names.IsSequence())
+        fail(p.entry->valueLine(), "inputs", "expected a list of bond names" + p.where);
+      if (static_cast<int>(names.size()) != type.network_inputs)
+        fail(p.entry->valueLine(), "inputs",
+             "muscle type '" + type.name + "' reads " + std::to_string(type.network_inputs) +
+                 " input bond(s), got " + std::to_string(names.size()) + p.where);
+      for (std::size_t k = 0; k < names.size(); ++k) {
+        const YAML::Node n = names[k];
+        if (!n.IsScalar()) fail(lineOf(n), "inputs", "expected a bond name" + p.where);
+        const int idx = model.bondIndex(n.Scalar());
+        if (idx < 0)
+          fail(lineOf(n), "inputs",
+               "unknown input bond '" + n.Scalar() + "' (no bond has that name)" + p.where);
+        if (idx == static_cast<int>(p.bond))
+          fail(lineOf(n), "inputs", "a muscle cannot read its own bond" + p.where);
+        const BondType& in_type = model.bond_types[model.bonds[idx].type];
+        if (!bondKindInfo(in_type.kind).has_elongation)
+          fail(lineOf(n), "inputs",
+               "input bond '" + n.Scalar() + "' is a " + kindName(in_type.kind) +
+                   " (inputs must be springs or muscles: bonds with an elongation)" + p.where);
+        bond.inputs.push_back(idx);
+      }
     }
   }
 
@@ -567,7 +656,7 @@ class Loader {
       const BondType& type = model.bond_types[in.type];
       // Interactions are installed between nearby particles, so they need a spring with a
       // range; without max_distance every pair in the groups would be bonded.
-      if (type.kind != BondKind::kSpring || !type.param(kMaxDistance).present)
+      if (!bondKindInfo(type.kind).interactions || !type.param(kMaxDistance).present)
         fail(type_e->valueLine(), "type",
              "interaction type '" + type.name + "' must be a spring with max_distance" + where);
       if (!groups_e) fail(lineOf(item), "groups", "interaction groups missing" + where);
@@ -846,6 +935,18 @@ std::string modelToYaml(const Model& model, const IdentificationInfo* info) {
       out << YAML::Key << paramKey(id) << YAML::Value;
       emitParam(out, p, stdOf(t.name + "/" + paramKey(id)));
     }
+    if (bondKindInfo(t.kind).network) {
+      out << YAML::Key << "inputs" << YAML::Value << t.network_inputs;
+      out << YAML::Key << "hidden" << YAML::Value << t.network_hidden;
+      for (std::size_t k = 0; k < t.network.size(); ++k) {
+        const Param& p = t.network[k];
+        if (!p.present) continue;
+        const std::string key =
+            muscleNetworkKey(t.network_inputs, t.network_hidden, static_cast<int>(k));
+        out << YAML::Key << key << YAML::Value;
+        emitParam(out, p, stdOf(t.name + "/" + key));
+      }
+    }
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;
@@ -858,7 +959,17 @@ std::string modelToYaml(const Model& model, const IdentificationInfo* info) {
     emitName(out, t.name);
     out << YAML::Key << "particles" << YAML::Value << YAML::Flow << YAML::BeginSeq;
     for (int k = 0; k < kindArity(t.kind); ++k) emitName(out, model.particles[b.particles[k]].name);
-    out << YAML::EndSeq << YAML::EndMap;
+    out << YAML::EndSeq;
+    if (!b.name.empty()) {
+      out << YAML::Key << "name" << YAML::Value;
+      emitName(out, b.name);
+    }
+    if (bondKindInfo(t.kind).network) {
+      out << YAML::Key << "inputs" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+      for (int in : b.inputs) emitName(out, model.bonds[in].name);
+      out << YAML::EndSeq;
+    }
+    out << YAML::EndMap;
   }
   out << YAML::EndSeq;
 

@@ -61,7 +61,7 @@ std::optional<VisualisationSnapshot> makeVisualisationSnapshot(const Model& mode
   const int costs = static_cast<int>(e.local_costs.size());
   for (const Bond& b : model.bonds) {
     const BondType& type = model.bond_types[b.type];
-    if (type.kind != BondKind::kSpring) continue;
+    if (!bondKindInfo(type.kind).has_elongation) continue;  // springs and muscles
     const int i = b.particles[0], j = b.particles[1];
     scene.bonds.emplace_back(i, j);
     switch (colouring) {

@@ -50,6 +50,54 @@ void addBond(Model* model, int type, int a, int b, int c) {
   model->bonds.push_back(bond);
 }
 
+std::string nameBond(Model* model, int bond, const std::string& name) {
+  model->bonds.at(bond).name = name;
+  return name;
+}
+
+int addMuscleType(Model* model, const std::string& name, double stiffness, double rest_length,
+                  double damping, double gain, int inputs, int hidden,
+                  const std::vector<double>& network, bool free) {
+  const int t = addType(model, name, BondKind::kMuscle,
+                        {{kStiffness, stiffness}, {kRestLength, rest_length}, {kDamping, damping},
+                         {kGain, gain}},
+                        free);
+  BondType& type = model->bond_types[t];
+  type.network_inputs = inputs;
+  type.network_hidden = hidden;
+  for (double v : network) type.network.push_back(valueParam(v, free));
+  return t;
+}
+
+void addMuscle(Model* model, int type, int a, int b, const std::vector<int>& inputs) {
+  addBond(model, type, a, b);
+  model->bonds.back().inputs = inputs;
+}
+
+Model muscleObject() {
+  Model m;
+  m.frame_rate_hz = 100;
+  for (int k = 0; k < 3; ++k) m.gravity_mps2[k] = valueParam(k == 2 ? -9.81 : 0.0);
+  addParticle(&m, Eigen::Vector3d(0, 0, 0), 1.0, true);
+  addParticle(&m, Eigen::Vector3d(0.2, 0.0, -0.05), 0.8, false, "", Eigen::Vector3d(0, 0.3, 0));
+  addParticle(&m, Eigen::Vector3d(0.25, 0.15, -0.15), 0.6, false, "", Eigen::Vector3d(0.2, 0, 0.1));
+  addParticle(&m, Eigen::Vector3d(0.05, 0.1, -0.25), 0.7, false, "", Eigen::Vector3d(-0.1, 0, 0));
+  const int s = addType(&m, "s", BondKind::kSpring, {{kStiffness, 60.0}, {kRestLength, 0.2}}, false);
+  const int d = addType(&m, "d", BondKind::kSpring,
+                        {{kStiffness, 35.0}, {kRestLength, 0.22}, {kDamping, 0.3}}, false);
+  addBond(&m, s, 0, 1);
+  nameBond(&m, 0, "upper");
+  addBond(&m, s, 1, 2);
+  nameBond(&m, 1, "lower");
+  addBond(&m, d, 2, 3);
+  addBond(&m, d, 1, 3);
+  addBond(&m, d, 0, 2);
+  // Network inputs: elongations of "upper", "lower" [m], then their speeds [m/s].
+  const int mu = addMuscleType(&m, "m", 40.0, 0.25, 0.2, 3.0, 2, 0, {30.0, -25.0, 2.0, -1.5, 0.2});
+  addMuscle(&m, mu, 0, 3, {0, 1});
+  return m;
+}
+
 Model smallObject() {
   Model m;
   m.frame_rate_hz = 100;

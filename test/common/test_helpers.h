@@ -28,6 +28,22 @@ int addParticle(Model* model, const Eigen::Vector3d& x, double mass_kg = 1.0, bo
 int addType(Model* model, const std::string& name, BondKind kind,
             std::initializer_list<std::pair<ParamId, double>> params, bool free = true);
 void addBond(Model* model, int type, int a, int b = -1, int c = -1);
+/// Names bond `bond` (so that a muscle can read it); returns the name.
+std::string nameBond(Model* model, int bond, const std::string& name);
+/// Adds a muscle type: stiffness [N/m], rest length [m], damping [N s/m], gain [N] and the
+/// network's parameters in storage order (muscleNetworkSize(inputs, hidden) of them), every
+/// one present and free or fixed as `free` says; returns its index.
+int addMuscleType(Model* model, const std::string& name, double stiffness, double rest_length,
+                  double damping, double gain, int inputs, int hidden,
+                  const std::vector<double>& network, bool free = false);
+/// Installs a muscle of type `type` between a and b reading the bonds `inputs` (indices).
+void addMuscle(Model* model, int type, int a, int b, const std::vector<int>& inputs);
+
+/// A hanging 4-particle object (p0 fixed, gravity) with 5 springs and one muscle (p0-p3) whose
+/// parameters are all fixed (tests free what they identify), and whose
+/// linear network (hidden 0) reads the springs p0-p1 and p1-p2: its activation changes sign
+/// with the swing, so the motion differs from a passive model's. 100 Hz.
+Model muscleObject();
 
 /// A small floating object: 5 particles, 3 linear spring types (stiffness and rest length free:
 /// 6 parameters, bounded [1, 1000] N/m and [0.05, 0.5] m), 7 bonds, 100 Hz.

@@ -56,9 +56,9 @@ Model makeModel() {
   // A parameter not of this kind must never be listed, even if set.
   v.param(kStiffness) = freeParam(99.0);
   m.bond_types = {s, f, v};
-  m.bonds.push_back(Bond{0, {{0, 1, -1}}});
-  m.bonds.push_back(Bond{1, {{0, 1, 2}}});
-  m.bonds.push_back(Bond{2, {{2, -1, -1}}});
+  m.bonds.push_back(Bond{0, {{0, 1, -1}}, "", {}});
+  m.bonds.push_back(Bond{1, {{0, 1, 2}}, "", {}});
+  m.bonds.push_back(Bond{2, {{2, -1, -1}}, "", {}});
   m.gravity_mps2[0] = fixedParam(0.0);
   m.gravity_mps2[1] = fixedParam(0.0);
   m.gravity_mps2[2] = freeParam(-9.81);

@@ -28,9 +28,9 @@ mme::Model twoTypeModel() {
   b.param(mme::kStiffness) = {2.0, true, true, false};
   b.param(mme::kRestAngle) = {2.5, true, true, true};
   m.bond_types = {a, b};
-  m.bonds.push_back({0, {{0, 1, -1}}});
-  m.bonds.push_back({0, {{1, 2, -1}}});
-  m.bonds.push_back({1, {{1, 2, 3}}});
+  m.bonds.push_back({0, {{0, 1, -1}}, "", {}});
+  m.bonds.push_back({0, {{1, 2, -1}}, "", {}});
+  m.bonds.push_back({1, {{1, 2, 3}}, "", {}});
   m.gravity_mps2[2] = {-9.81, true, true, true};
   return m;
 }

@@ -21,6 +21,7 @@
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/model.h"
 #include "motion_model_estimation/io/model_yaml.h"
+#include "test_helpers.h"
 
 namespace mme {
 namespace {
@@ -120,11 +121,19 @@ void expectSameModel(const Model& a, const Model& b) {
     for (int id = 0; id < kParamCount; ++id)
       expectSameParam(a.bond_types[t].params[id], b.bond_types[t].params[id],
                       a.bond_types[t].name + "/" + paramKey(static_cast<ParamId>(id)));
+    EXPECT_EQ(a.bond_types[t].network_inputs, b.bond_types[t].network_inputs);
+    EXPECT_EQ(a.bond_types[t].network_hidden, b.bond_types[t].network_hidden);
+    ASSERT_EQ(a.bond_types[t].network.size(), b.bond_types[t].network.size());
+    for (size_t k = 0; k < a.bond_types[t].network.size(); ++k)
+      expectSameParam(a.bond_types[t].network[k], b.bond_types[t].network[k],
+                      a.bond_types[t].name + "/network " + std::to_string(k));
   }
   ASSERT_EQ(a.bonds.size(), b.bonds.size());
   for (size_t i = 0; i < a.bonds.size(); ++i) {
     EXPECT_EQ(a.bonds[i].type, b.bonds[i].type);
     EXPECT_EQ(a.bonds[i].particles, b.bonds[i].particles);
+    EXPECT_EQ(a.bonds[i].name, b.bonds[i].name);
+    EXPECT_EQ(a.bonds[i].inputs, b.bonds[i].inputs);
   }
   ASSERT_EQ(a.interactions.size(), b.interactions.size());
   for (size_t i = 0; i < a.interactions.size(); ++i) {
@@ -356,7 +365,7 @@ TEST(ModelYaml, NamesThatLookLikeOtherTypesStayStrings) {
   t.param(kViscosity).present = t.param(kViscosity).has_value = true;
   t.param(kViscosity).value = 1.0;
   m.bond_types.push_back(t);
-  m.bonds.push_back(Bond{0, {{1, -1, -1}}});
+  m.bonds.push_back(Bond{0, {{1, -1, -1}}, "", {}});
   const std::string text = modelToYaml(m);
   EXPECT_NE(text.find("name: \"007\""), std::string::npos) << text;
   expectSameModel(m, loadModelString(text, "names.yaml"));
@@ -378,8 +387,8 @@ TEST(ModelYaml, NamesWithControlCharactersAndBlanksRoundTrip) {
   m.bond_types.push_back(t);
   t.name = "a\nb";
   m.bond_types.push_back(t);
-  m.bonds.push_back(Bond{0, {{1, -1, -1}}});
-  m.bonds.push_back(Bond{1, {{2, -1, -1}}});
+  m.bonds.push_back(Bond{0, {{1, -1, -1}}, "", {}});
+  m.bonds.push_back(Bond{1, {{2, -1, -1}}, "", {}});
   const std::string text = modelToYaml(m);
   expectSameModel(m, loadModelString(text, "control_names.yaml"));
 }
@@ -413,17 +422,19 @@ const std::vector<std::string> kBase = {
     "  - {type: s, particles: [a, b]}",      // 15
 };
 
-/// kBase with line `line` (1-based) replaced by `text`; line = size+1 appends.
-std::string edited(int line, const std::string& text) {
+/// `base` with line `line` (1-based) replaced by `text`; line = size+1 appends.
+std::string editedLines(const std::vector<std::string>& base, int line, const std::string& text) {
   std::string out;
-  for (int i = 1; i <= static_cast<int>(kBase.size()) + 1; ++i) {
+  for (int i = 1; i <= static_cast<int>(base.size()) + 1; ++i) {
     if (i == line)
       out += text + "\n";
-    else if (i <= static_cast<int>(kBase.size()))
-      out += kBase[i - 1] + "\n";
+    else if (i <= static_cast<int>(base.size()))
+      out += base[i - 1] + "\n";
   }
   return out;
 }
+
+std::string edited(int line, const std::string& text) { return editedLines(kBase, line, text); }
 
 std::string errorOf(const std::string& yaml, const std::string& source = "bad.yaml") {
   try {
@@ -531,9 +542,100 @@ TEST(ModelYamlErrors, MalformedNumber) {
   expectError(edited(3, "  - {name: a, position: [1, 2]}"), 3, "position", "3 numbers");
 }
 
-TEST(ModelYamlErrors, MuscleAndUnknownKinds) {
-  expectError(edited(12, "    kind: muscle"), 12, "kind", "muscles are not supported yet");
-  expectError(edited(12, "    kind: hinge"), 12, "kind", "unknown kind 'hinge'");
+TEST(ModelYamlErrors, UnknownKind) {
+  expectError(edited(12, "    kind: hinge"), 12, "kind",
+              "unknown kind 'hinge' (expected spring, flexion, viscosity, muscle or floor)");
+}
+
+// ------------------------------------------------------------------------------ muscles
+
+// A muscle reading two springs, one of them declared after it; hidden layer of 1.
+const std::vector<std::string> kMuscleBase = {
+    "particles:",                                                       // 1
+    "  - {name: a, mass: 1}",                                           // 2
+    "  - {name: b, mass: 1}",                                           // 3
+    "  - {name: c, mass: 1}",                                           // 4
+    "bond_types:",                                                      // 5
+    "  - {name: s, kind: spring, stiffness: 10, rest_length: 0.2}",     // 6
+    "  - {name: f, kind: flexion, stiffness: 1, rest_angle: 2}",        // 7
+    "  - name: m",                                                      // 8
+    "    kind: muscle",                                                 // 9
+    "    stiffness: {value: 40, free: true, min: 1, max: 400}",         // 10
+    "    rest_length: 0.25",                                            // 11
+    "    damping: 0.5",                                                 // 12
+    "    gain: {value: 2.5, free: true, std: 0.1}",                     // 13
+    "    inputs: 2",                                                    // 14
+    "    hidden: 1",                                                    // 15
+    "    w1_0_0: {value: 30, free: true, min: -50, max: 50}",           // 16
+    "    w1_0_3: -1.5",                                                 // 17
+    "    w2_0: {value: 1.25, free: true}",                              // 18
+    "    b2: 0.1",                                                      // 19
+    "bonds:",                                                           // 20
+    "  - {type: s, particles: [a, b], name: ab}",                       // 21
+    "  - {type: m, particles: [a, c], inputs: [ab, bc]}",               // 22
+    "  - {type: s, particles: [b, c], name: bc}",                       // 23
+    "  - {type: f, particles: [a, b, c], name: abc}",                   // 24
+};
+
+std::string muscleEdited(int line, const std::string& text) {
+  return editedLines(kMuscleBase, line, text);
+}
+
+TEST(ModelYaml, MuscleLoadsItsNetworkAndInputs) {
+  const Model m = loadModelString(muscleEdited(99, ""), "muscle.yaml");
+  const BondType& t = m.bond_types[m.bondTypeIndex("m")];
+  EXPECT_EQ(t.kind, BondKind::kMuscle);
+  EXPECT_EQ(t.network_inputs, 2);
+  EXPECT_EQ(t.network_hidden, 1);
+  ASSERT_EQ(t.network.size(), 7u);  // w1_0_0..3, b1_0, w2_0, b2
+  EXPECT_TRUE(t.network[0].free);
+  EXPECT_EQ(t.network[0].max, 50.0);
+  EXPECT_EQ(t.network[3].value, -1.5);
+  EXPECT_FALSE(t.network[1].present);  // absent: 0, fixed
+  EXPECT_FALSE(t.network[4].present);
+  EXPECT_EQ(t.network[5].value, 1.25);
+  EXPECT_EQ(t.network[6].value, 0.1);
+  EXPECT_EQ(t.value(kGain), 2.5);
+  EXPECT_EQ(m.bonds[1].inputs, (std::vector<int>{0, 2}));
+  EXPECT_EQ(m.bonds[0].name, "ab");
+  std::vector<std::string> names;
+  for (const ParamRef& r : freeParameters(m)) names.push_back(r.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"m/stiffness", "m/gain", "m/w1_0_0", "m/w2_0"}));
+}
+
+TEST(ModelYaml, MuscleRoundTripIsExact) {
+  const Model m = loadModelString(muscleEdited(99, ""), "muscle.yaml");
+  const std::string text = modelToYaml(m);
+  const Model back = loadModelString(text, "back.yaml");
+  expectSameModel(m, back);
+  EXPECT_EQ(modelToYaml(back), text);
+  // The test helpers' muscle object (built in code) too.
+  const Model object = mme::test::muscleObject();
+  expectSameModel(object, loadModelString(modelToYaml(object), "object.yaml"));
+}
+
+TEST(ModelYamlErrors, BadMuscleDefinitions) {
+  expectError(muscleEdited(22, "  - {type: m, particles: [a, c], inputs: [ab, xy]}"), 22, "inputs",
+              "unknown input bond 'xy' (no bond has that name) in bonds[1]");
+  expectError(muscleEdited(22, "  - {type: m, particles: [a, c], inputs: [ab]}"), 22, "inputs",
+              "muscle type 'm' reads 2 input bond(s), got 1 in bonds[1]");
+  expectError(muscleEdited(22, "  - {type: m, particles: [a, c]}"), 22, "inputs",
+              "a muscle bond (type 'm') names its 2 input bond(s)");
+  expectError(muscleEdited(22, "  - {type: m, particles: [a, c], inputs: [ab, abc]}"), 22, "inputs",
+              "input bond 'abc' is a flexion (inputs must be springs or muscles");
+  expectError(muscleEdited(22, "  - {type: m, particles: [a, c], inputs: [ab, me], name: me}"), 22,
+              "inputs", "a muscle cannot read its own bond");
+  expectError(muscleEdited(21, "  - {type: s, particles: [a, b], name: ab, inputs: [bc]}"), 21,
+              "inputs", "only muscle bonds have inputs (type 's' is a spring)");
+  expectError(muscleEdited(23, "  - {type: s, particles: [b, c], name: ab}"), 23, "name",
+              "duplicate bond name 'ab' (first at line 21)");
+  expectError(muscleEdited(17, "    w1_1_0: 2"), 17, "w1_1_0",
+              "unknown key for a muscle in bond type 'm' (allowed: name, kind, stiffness, "
+              "rest_length, damping, gain, inputs, hidden, and the network's "
+              "w1_<0..0>_<0..3>, b1_<0..0>, w2_<0..0>, b2 (inputs 2, hidden 1))");
+  expectError(muscleEdited(15, "    hidden: 40"), 15, "hidden", "must be in [0, 32]");
+  expectError(muscleEdited(14, "    inputs: -1"), 14, "inputs", "must be in [0, 16]");
+  expectError(muscleEdited(12, "    stiffness_nl: 3"), 12, "stiffness_nl", "unknown key for a muscle");
 }
 
 TEST(ModelYamlErrors, DuplicateKey) {

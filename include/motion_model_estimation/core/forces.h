@@ -22,6 +22,20 @@ struct FlexionLaw {
   double damping = 0;     ///< [N m s/rad]
 };
 
+/// Ground contact of one particle with the floor plane z = height (world z up).
+struct FloorLaw {
+  double stiffness = 0;  ///< k [N/m] on the penetration
+  double damping = 0;    ///< c [N s/m] on the normal speed
+  double friction = 0;   ///< mu [N s/m]: viscous, along the floor
+  double height = 0;     ///< [m]
+};
+
+/// Adds the floor's force on a particle at x with velocity v: with penetration p = height - z > 0,
+/// F_z += max(0, k p - c v_z) (it pushes, never pulls), F_x += -mu v_x, F_y += -mu v_y; nothing
+/// when p <= 0.
+void addFloorForce(const FloorLaw& law, const Eigen::Vector3d& x, const Eigen::Vector3d& v,
+                   Eigen::Vector3d* f);
+
 /// Adds the spring force between a and b: f = k e + k_nl e^3 + c s + c_nl s|s| along u = (xb-xa)/l;
 /// F_a += f u, F_b -= f u; nothing outside [min_distance, max_distance] or when l == 0.
 void addSpringForce(const SpringLaw& law, const Eigen::Vector3d& xa, const Eigen::Vector3d& xb,

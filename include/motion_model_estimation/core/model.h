@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "motion_model_estimation/core/bond_kind.h"
+
 namespace mme {
 
 /// One scalar parameter of a bond type or of gravity (SPEC section 2 parameter block).
@@ -22,35 +24,23 @@ struct Param {
   bool has_max = false;
 };
 
-enum class BondKind { kSpring, kFlexion, kViscosity };
-
-/// Every parameter a bond type can carry. Which ones apply depends on the kind.
-enum ParamId : int {
-  kStiffness = 0,     ///< spring [N/m]; flexion [N m/rad]
-  kRestLength,        ///< spring [m]
-  kDamping,           ///< spring [N s/m]; flexion [N m s/rad]
-  kStiffnessNl,       ///< spring cubic term [N/m^3]
-  kDampingNl,         ///< spring quadratic damping [N s^2/m^2]
-  kMinDistance,       ///< spring active only when length >= it [m]
-  kMaxDistance,       ///< spring active only when length <= it [m]
-  kMaxElongation,     ///< Provot's tau_c [1]: length clamped to (1+tau_c) rest_length
-  kRestAngle,         ///< flexion [rad]
-  kViscosity,         ///< unary viscosity [N s/m]
-  kParamCount
-};
-
-/// YAML key / parameter-name suffix of a ParamId ("stiffness", "rest_length", ...).
-const char* paramKey(ParamId id);
-/// Parameters allowed for a bond kind, in canonical order.
+/// Parameters allowed for a bond kind, in canonical order (bondKindInfo(kind).params).
 const std::vector<ParamId>& paramsOfKind(BondKind kind);
+/// The model file's name of a kind (bondKindInfo(kind).name).
 const char* kindName(BondKind kind);
-/// Number of particles a bond of this kind joins (spring 2, flexion 3, viscosity 1).
+/// Number of particles a bond of this kind joins (spring 2, flexion 3, viscosity 1, muscle 2).
 int kindArity(BondKind kind);
 
 struct BondType {
   std::string name;
   BondKind kind = BondKind::kSpring;
   std::array<Param, kParamCount> params{};
+  /// Muscles (see muscle.h): input bonds each bond of the type reads, hidden units, and the
+  /// network's parameters (muscleNetworkSize(network_inputs, network_hidden) of them, named by
+  /// muscleNetworkKey; an absent one is 0 and fixed). Empty for every other kind.
+  int network_inputs = 0;
+  int network_hidden = 0;
+  std::vector<Param> network;
   Param& param(ParamId id) { return params[id]; }
   const Param& param(ParamId id) const { return params[id]; }
   /// Value used by the physics: 0 when absent.
@@ -71,6 +61,8 @@ struct Particle {
 struct Bond {
   int type = -1;
   std::array<int, 3> particles{{-1, -1, -1}};
+  std::string name;         ///< optional; unique when given; needed to be a muscle's input
+  std::vector<int> inputs;  ///< muscle bonds: indices of the bonds its network reads
 };
 
 /// Bonds installed on the fly between particles of two groups within the type's max_distance.
@@ -92,18 +84,23 @@ struct Model {
 
   int particleIndex(const std::string& name) const;  ///< -1 when unknown
   int bondTypeIndex(const std::string& name) const;  ///< -1 when unknown
+  int bondIndex(const std::string& name) const;      ///< installed bond by name; -1 when unknown
   Eigen::Vector3d gravity() const;
 };
 
 /// Where a free parameter lives in the model.
 struct ParamRef {
-  std::string name;  ///< "<bond_type>/<param>" or "gravity/x|y|z"
+  std::string name;  ///< "<bond_type>/<param>" (muscle network: "<bond_type>/w1_0_2", ...) or "gravity/x|y|z"
   int bond_type = -1;  ///< -1 for gravity
-  int param = 0;       ///< ParamId, or gravity component 0..2
+  /// ParamId; kParamCount + k for the k-th network parameter of a muscle type
+  /// (BondType::network[k]); or the gravity component 0..2.
+  int param = 0;
+  bool isNetwork() const { return bond_type >= 0 && param >= kParamCount; }
 };
 
-/// All free parameters in canonical order (bond types in catalogue order, params in
-/// paramsOfKind order, then gravity x, y, z).
+/// All free parameters in canonical order (bond types in catalogue order; in a type its
+/// paramsOfKind parameters, then its network parameters in BondType::network order; then
+/// gravity x, y, z).
 std::vector<ParamRef> freeParameters(const Model& model);
 /// All parameters that are present (free or fixed), same order rules.
 std::vector<ParamRef> presentParameters(const Model& model);

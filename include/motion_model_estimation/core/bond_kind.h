@@ -1,0 +1,63 @@
+// The catalogue of bond kinds: every fixed fact about a kind (its YAML name, arity, parameter
+// list, what else it may be used for) in one table, bondKindInfo(). Adding a kind is one entry
+// here plus its force law in the engine; every `switch` over BondKind is exhaustive (no
+// `default:`), and the core is built with -Werror=switch, so a forgotten kind does not compile.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace mme {
+
+enum class BondKind { kSpring, kFlexion, kViscosity, kMuscle, kFloor };
+
+/// Every fixed-size parameter a bond type can carry. Which ones apply depends on the kind
+/// (BondKindInfo::params). A muscle's network parameters are not here: their number depends on
+/// the type (BondType::network, see muscle.h).
+enum ParamId : int {
+  kStiffness = 0,     ///< spring, muscle, floor [N/m]; flexion [N m/rad]
+  kRestLength,        ///< spring, muscle [m]
+  kDamping,           ///< spring, muscle, floor [N s/m]; flexion [N m s/rad]
+  kStiffnessNl,       ///< spring cubic term [N/m^3]
+  kDampingNl,         ///< spring quadratic damping [N s^2/m^2]
+  kMinDistance,       ///< spring active only when length >= it [m]
+  kMaxDistance,       ///< spring active only when length <= it [m]
+  kMaxElongation,     ///< Provot's tau_c [1]: length clamped to (1+tau_c) rest_length
+  kRestAngle,         ///< flexion [rad]
+  kViscosity,         ///< unary viscosity [N s/m]
+  kGain,              ///< muscle output gain [N]: activation = gain * tanh(network output)
+  kFriction,          ///< floor: viscous friction along the floor while in contact [N s/m]
+  kHeight,            ///< floor: height of the floor plane z = height [m] (world z up)
+  kParamCount
+};
+
+/// YAML key / parameter-name suffix of a ParamId ("stiffness", "rest_length", ...).
+const char* paramKey(ParamId id);
+
+/// What is fixed about one bond kind.
+struct BondKindInfo {
+  BondKind kind;
+  const char* name;             ///< the model file's `kind:` value
+  int arity;                    ///< particles a bond joins (flexion: the middle one is the vertex)
+  std::vector<ParamId> params;  ///< fixed-size parameters allowed, in canonical order
+  /// A pair bond with a rest length, so its elongation l - rest_length [m] and elongation
+  /// speed [m/s] are defined: strain colouring, the stiffest mode, muscle inputs.
+  bool has_elongation;
+  /// May be installed on the fly between groups (`interactions:`).
+  bool interactions;
+  /// Has variable-length network parameters (BondType::network) and per-bond inputs.
+  bool network;
+  // Local-cost sites (the evolution strategy's crossover) are, for every kind, the `arity`
+  // particles a bond joins: the particles its force acts on.
+};
+
+/// The catalogue entry of a kind.
+const BondKindInfo& bondKindInfo(BondKind kind);
+/// The kind named `name` in a model file; nullptr when there is none.
+const BondKindInfo* bondKindByName(const std::string& name);
+/// Every kind, in enum order.
+const std::vector<BondKind>& allBondKinds();
+/// "spring, flexion, viscosity, muscle or floor": for error messages.
+std::string bondKindNameList();
+
+}  // namespace mme

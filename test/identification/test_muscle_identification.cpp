@@ -1,0 +1,115 @@
+// Muscles in identification: the local-cost sites of a muscle type are its own ends, the
+// search space keeps network parameters signed (linear coordinates, symmetric default bounds),
+// the equation-error start declines muscle parameters with a reason, and the evolution
+// strategy identifies a small scene with one muscle type.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "motion_model_estimation/core/short_term_cost.h"
+#include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/identification/equation_error.h"
+#include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/identification/parameter_space.h"
+#include "test_helpers.h"
+
+namespace {
+
+using mme::Model;
+
+/// muscleObject() with the muscle's gain and network (and, if asked, its spring part) free.
+Model freeMuscle(bool spring_part_free) {
+  Model m = mme::test::muscleObject();
+  mme::BondType& t = m.bond_types[m.bondTypeIndex("m")];
+  t.param(mme::kGain).free = true;
+  for (mme::Param& p : t.network) p.free = true;
+  if (spring_part_free)
+    for (mme::ParamId id : {mme::kStiffness, mme::kRestLength, mme::kDamping}) t.param(id).free = true;
+  return m;
+}
+
+TEST(MuscleIdentification, AMuscleTypesSitesAreItsEndsAndItsNetworkGenesAreSigned) {
+  const Model m = freeMuscle(false);
+  const mme::Trajectory data = mme::simulateTrajectory(m, 40, 100.0);
+  const mme::ParameterSpace space(m, data);
+  const int type = m.bondTypeIndex("m");
+  EXPECT_EQ(space.sitesOfType()[type], (std::vector<int>{0, 3}));
+  for (const mme::Gene& g : space.genes()) {
+    if (!g.ref.isNetwork()) {
+      EXPECT_TRUE(g.log_scale) << g.ref.name;  // the gain: a positive magnitude
+      continue;
+    }
+    EXPECT_FALSE(g.log_scale) << g.ref.name;
+    EXPECT_EQ(g.lower, -g.upper) << g.ref.name;
+    EXPECT_EQ(g.upper, g.ref.name == "m/b2" ? 5.0 : 100.0) << g.ref.name;
+  }
+}
+
+TEST(MuscleIdentification, TheEquationErrorLeavesMuscleParametersToTheSearch) {
+  const Model m = freeMuscle(false);
+  const mme::Trajectory data = mme::simulateTrajectory(m, 40, 100.0);
+  const mme::EquationErrorResult declined = mme::solveEquationError(m, data);
+  EXPECT_FALSE(declined.applicable);
+  EXPECT_NE(declined.reason.find("'m/gain' does not enter the forces linearly"), std::string::npos)
+      << declined.reason;
+  // With the muscle fixed, the springs around it are solved as before: the muscle's force is
+  // part of the known forces.
+  Model springs = mme::test::muscleObject();
+  springs.bond_types[springs.bondTypeIndex("s")].param(mme::kStiffness).free = true;
+  for (mme::ParamId id : {mme::kStiffness, mme::kRestLength, mme::kDamping})
+    springs.bond_types[springs.bondTypeIndex("d")].param(id).free = true;
+  // A free rest length of a bond the muscle reads would make its activation unknown.
+  Model reads_free = springs;
+  reads_free.bond_types[reads_free.bondTypeIndex("s")].param(mme::kRestLength).free = true;
+  EXPECT_EQ(mme::solveEquationError(reads_free, data).reason,
+            "'s/rest_length' is free and read by a muscle's network");
+  const mme::EquationErrorResult sol = mme::solveEquationError(springs, data);
+  ASSERT_TRUE(sol.applicable) << sol.reason;
+  const std::vector<double> truth = mme::getValues(springs, mme::freeParameters(springs));
+  EXPECT_LT(mme::test::maxRelativeError(sol.values, truth), 1e-6);
+}
+
+// The muscle's spring part, gain and network (9 parameters, no initial values) from 80 noiseless
+// frames. Fitting a network is multimodal: from 6 seeds, 3 (1, 4, 6) recover every parameter to
+// round-off and the others stall in local minima (costs 1e-6..4e-4 m^2), every one of them still
+// far below the best passive model (the muscle as a plain spring, 2e-3 m^2). The test asserts
+// exactly that; the default seed is one that recovers.
+TEST(MuscleIdentification, TheEvolutionStrategyIdentifiesAMuscleFromNoInitialValues) {
+  const Model truth = freeMuscle(true);
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 80, 100.0);
+  const std::vector<double> want = mme::getValues(truth, mme::freeParameters(truth));
+  ASSERT_EQ(want.size(), 9u);
+
+  Model passive = mme::test::muscleObject();
+  mme::BondType& t = passive.bond_types[passive.bondTypeIndex("m")];
+  t.param(mme::kGain).value = 0.0;
+  for (mme::ParamId id : {mme::kStiffness, mme::kRestLength, mme::kDamping}) t.param(id).free = true;
+  mme::IdentifyOptions passive_options;
+  passive_options.generations = 400;
+  passive_options.estimate_std = false;
+  const double passive_cost =
+      mme::identifyModel(mme::test::withoutValues(passive), data, passive_options).global_cost;
+  EXPECT_GT(passive_cost, 1e-3);
+
+  int recovered = 0;
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    mme::IdentifyOptions options;
+    options.generations = 400;
+    options.patience_generations = 0;  // a network's fit keeps improving after plateaus
+    options.es.seed = seed;
+    options.estimate_std = false;
+    const mme::IdentifyResult r = mme::identifyModel(mme::test::withoutValues(truth), data, options);
+    const double error = mme::test::maxRelativeError(r.values, want);
+    SCOPED_TRACE("seed " + std::to_string(seed) + ": cost " + std::to_string(r.global_cost) +
+                 ", largest relative error " + std::to_string(error));
+    if (seed == 1) {
+      EXPECT_LT(error, 1e-6);
+      EXPECT_LT(r.global_cost / data.numFrames(), 1e-26);
+    }
+    recovered += error < 1e-6;
+    EXPECT_LT(r.global_cost, 0.25 * passive_cost);
+  }
+  EXPECT_GE(recovered, 3);
+}
+
+}  // namespace
