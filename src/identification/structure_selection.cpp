@@ -582,6 +582,7 @@ Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, i
   struct Cluster {
     BondValues sum_w_v = BondValues::Zero(), sum_w = BondValues::Zero();
     uint8_t terms = 0;
+    bool conditional = false;  ///< a spring with a threshold: a type of its own
     BondKind kind = BondKind::kSpring;
     int first_member = -1;
     BondValues mean() const { return sum_w_v.cwiseQuotient(sum_w); }
@@ -600,7 +601,10 @@ Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, i
       const BondKind kind = m.bond_types[first_candidate_type + idx].kind;
       // One kind with the same optional terms; the values present agree.
       const uint8_t terms = solved.terms[idx];
-      bool agree = clusters[c].kind == kind && clusters[c].terms == terms;
+      const BondType& member = m.bond_types[first_candidate_type + idx];
+      const bool conditional = member.param(kMinDistance).present || member.param(kMaxDistance).present;
+      bool agree = clusters[c].kind == kind && clusters[c].terms == terms && !conditional &&
+                   !clusters[c].conditional;
       for (int d = 0; d < 5 && agree; ++d)
         if (d < 2 || (terms & (1u << (d - 2))))
           agree = std::fabs(v[d] - mu[d]) <= sigmas * std::sqrt(s[d] * s[d] + sc[d] * sc[d]);
@@ -610,6 +614,8 @@ Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, i
       join = static_cast<int>(clusters.size());
       clusters.emplace_back();
       clusters.back().terms = solved.terms[idx];
+      clusters.back().conditional = m.bond_types[first_candidate_type + idx].param(kMinDistance).present ||
+                                    m.bond_types[first_candidate_type + idx].param(kMaxDistance).present;
       clusters.back().kind = m.bond_types[first_candidate_type + idx].kind;
       clusters.back().first_member = idx;
     }
@@ -704,9 +710,10 @@ void heldOutErrors(const Model& model, const Trajectory& held, StructureCandidat
 /// more than 20 ln(N) times the residual's mean square (a pair of parameters' BIC price with a
 /// wide margin, so that noise adds nothing), the most first, at most `most`; none when the
 /// residual's RMS is below `floor_rms_m` (nothing is missing).
-std::vector<std::pair<int, int>> missingPairs(const Model& model, const Trajectory& data,
-                                              const std::set<std::pair<int, int>>& have,
-                                              double floor_rms_m, int most) {
+/// Per frame, the weighted one-step residual (m a - F) h^2 / m of every free particle seen at
+/// t-1, t and t+1 under `model` (every value set; raw differences); NaN elsewhere, and frames
+/// 0 and T-1 empty.
+std::vector<std::vector<Eigen::Vector3d>> oneStepResiduals(const Model& model, const Trajectory& data) {
   const int n = static_cast<int>(model.particles.size()), frames = data.numFrames();
   const double h = 1.0 / model.frame_rate_hz;
   Simulator simulator(model);
@@ -714,7 +721,6 @@ std::vector<std::pair<int, int>> missingPairs(const Model& model, const Trajecto
   state.x_m.resize(n);
   state.v_mps.resize(n);
   std::vector<Eigen::Vector3d> force;
-  // Per frame, the weighted residual of every particle seen at t-1, t, t+1 (NaN otherwise).
   std::vector<std::vector<Eigen::Vector3d>> residual(frames);
   for (int t = 1; t + 1 < frames; ++t) {
     std::vector<uint8_t> seen(n);
@@ -734,6 +740,15 @@ std::vector<std::pair<int, int>> missingPairs(const Model& model, const Trajecto
       residual[t][i] = h * h / m * (m * a - force[i]);
     }
   }
+  return residual;
+}
+
+std::vector<std::pair<int, int>> missingPairs(const Model& model, const Trajectory& data,
+                                              const std::set<std::pair<int, int>>& have,
+                                              double floor_rms_m, int most) {
+  const int n = static_cast<int>(model.particles.size()), frames = data.numFrames();
+  const double h = 1.0 / model.frame_rate_hz;
+  const std::vector<std::vector<Eigen::Vector3d>> residual = oneStepResiduals(model, data);
   double sum2 = 0.0;
   long rows = 0;
   for (const auto& frame : residual)
@@ -779,6 +794,80 @@ std::vector<std::pair<int, int>> missingPairs(const Model& model, const Trajecto
 }
 
 }  // namespace
+
+/// A kept spring made conditional: active only when its length is at least (`lower`) or at
+/// most the threshold.
+struct ConditionalChoice {
+  int type = -1;
+  bool lower = true;
+  double threshold_m = 0.0;
+  double gain_m2 = 0.0;  ///< the residual's fall when the bond is off beyond the threshold
+};
+
+/// For each candidate spring of `model` (types from `first_candidate_type`, one bond each, every
+/// value set), the threshold whose switching the one-step residual asks for most: the bond's
+/// force removed on the frames where it is shorter (or longer) than the threshold, the residual's
+/// fall is a prefix (suffix) sum over the frames sorted by length. Returns those falling by more
+/// than `min_gain_m2`, the most first.
+std::vector<ConditionalChoice> conditionalCandidates(const Model& model, const Trajectory& data,
+                                                     int first_candidate_type, double min_gain_m2) {
+  const std::vector<std::vector<Eigen::Vector3d>> residual = oneStepResiduals(model, data);
+  const double h = 1.0 / model.frame_rate_hz;
+  std::vector<ConditionalChoice> out;
+  for (const Bond& bond : model.bonds) {
+    if (bond.type < first_candidate_type) continue;
+    const BondType& type = model.bond_types[bond.type];
+    if (type.kind != BondKind::kSpring || type.param(kMinDistance).present ||
+        type.param(kMaxDistance).present)
+      continue;
+    SpringLaw law;  // unconditional (checked above)
+    law.stiffness = type.value(kStiffness);
+    law.rest_length = type.value(kRestLength);
+    law.damping = type.value(kDamping);
+    law.stiffness_nl = type.value(kStiffnessNl);
+    law.damping_nl = type.value(kDampingNl);
+    const int a = bond.particles[0], c = bond.particles[1];
+    std::vector<std::pair<double, double>> rows;  // (length, residual change when off)
+    for (int t = 1; t + 1 < data.numFrames(); ++t) {
+      if (residual[t].empty() || data.isOccluded(t, a) || data.isOccluded(t, c) ||
+          data.isOccluded(t - 1, a) || data.isOccluded(t - 1, c))
+        continue;
+      const Eigen::Vector3d xa = data.position(t, a), xc = data.position(t, c);
+      const Eigen::Vector3d va = (xa - data.position(t - 1, a)) / h, vc = (xc - data.position(t - 1, c)) / h;
+      Eigen::Vector3d fa = Eigen::Vector3d::Zero(), fc = Eigen::Vector3d::Zero();
+      addSpringForce(law, xa, xc, va, vc, &fa, &fc);
+      double change = 0.0;
+      bool usable = false;
+      for (int side = 0; side < 2; ++side) {
+        const int i = side == 0 ? a : c;
+        const Eigen::Vector3d& r = residual[t][i];
+        if (!r.allFinite()) continue;
+        usable = true;
+        // r = (m a - F) h^2 / m: without the bond's force f on i, r + f h^2 / m.
+        const Eigen::Vector3d off = r + (h * h / model.particles[i].mass_kg) * (side == 0 ? fa : fc);
+        change += off.squaredNorm() - r.squaredNorm();
+      }
+      if (usable) rows.push_back({(xc - xa).norm(), change});
+    }
+    if (rows.size() < 4) continue;
+    std::sort(rows.begin(), rows.end());
+    ConditionalChoice best;
+    best.type = bond.type;
+    double prefix = 0.0, total = 0.0;
+    for (const auto& row : rows) total += row.second;
+    for (size_t k = 1; k < rows.size(); ++k) {
+      prefix += rows[k - 1].second;  // frames [0, k) off: the bond shorter than the threshold
+      const double threshold = 0.5 * (rows[k - 1].first + rows[k].first);
+      if (-prefix > best.gain_m2) best = {bond.type, true, threshold, -prefix};
+      const double suffix = total - prefix;  // frames [k, end) off: longer than the threshold
+      if (-suffix > best.gain_m2) best = {bond.type, false, threshold, -suffix};
+    }
+    if (best.gain_m2 > min_gain_m2) out.push_back(best);
+  }
+  std::sort(out.begin(), out.end(),
+            [](const ConditionalChoice& x, const ConditionalChoice& y) { return x.gain_m2 > y.gain_m2; });
+  return out;
+}
 
 /// The held-out 10-frame error decides; within 2 % of the best, the criterion (then fewer
 /// parameters) does.
@@ -937,6 +1026,7 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
     std::string name;
     bool dampers, flexion, viscosity;
     int nonlinear_on = -1;  ///< >= 0: the non-linear terms on that level's kept bonds
+    int conditional_on = -1;  ///< >= 0: conditions on that level's kept springs
   };
   std::vector<Level> levels = {{"springs", false, false, false}};
   if (options.try_dampers) levels.push_back({"springs+dampers", true, false, false});
@@ -949,12 +1039,15 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
   // A level's typed model refitted by the full identification on the fitted frames (rest
   // lengths of the non-linear level free again: the seeds are Gauss-Newton steps of the
   // linearised equation error from the values) and judged on the held-out frames.
-  const auto refitAndJudge = [&](StructureCandidate* cand, bool nonlinear, int first_type) {
-    if (nonlinear)
-      for (size_t t = first_type; t < cand->model.bond_types.size(); ++t) {
-        BondType& type = cand->model.bond_types[t];
-        if (type.kind == BondKind::kSpring && type.param(kStiffness).free) type.param(kRestLength).free = true;
-      }
+  const auto refitAndJudge = [&](StructureCandidate* cand, bool nonlinear, bool conditional, int first_type) {
+    for (size_t t = first_type; t < cand->model.bond_types.size(); ++t) {
+      BondType& type = cand->model.bond_types[t];
+      if (type.kind != BondKind::kSpring || !type.param(kStiffness).free) continue;
+      if (nonlinear) type.param(kRestLength).free = true;
+      // The thresholds held for the equation error are refined by the threshold search.
+      for (ParamId id : {kMinDistance, kMaxDistance})
+        if (conditional && type.param(id).present) type.param(id).free = true;
+    }
     if (options.refit) {
       IdentifyOptions io = options.identify;
       io.cost = CostChoice::kShortTerm;  // ranking only: the final fit is the caller's
@@ -979,17 +1072,32 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
   };
   std::vector<std::string> signatures;  // per level: the kept structure before typing
   std::vector<Model> untyped;           // per level: the kept bonds, one type each, values set
+  std::vector<ConditionalChoice> conditional_choices;  // the conditional level's thresholds
+  int conditional_rounds = 0;
+  std::vector<double> base_sigma2;      // per level: its noise level (the criterion's sigma^2)
+  std::vector<size_t> base_rows;        // ... and its equations
   const size_t cumulative_levels = levels.size();
   for (size_t level_index = 0; level_index < levels.size(); ++level_index) {
     const Level level = levels[level_index];
     const bool dampers = level.dampers;
     const bool nonlinear = level.nonlinear_on >= 0;
+    const bool conditional = level.conditional_on >= 0;
     StructureCandidate cand;
     cand.name = level.name;
     Model full = model;
     if (nonlinear) {
       // The non-linear level: the base level's kept bonds, values set.
       full = untyped[level.nonlinear_on];
+    } else if (conditional) {
+      // The conditional level: the base level's kept bonds, the chosen springs with a threshold
+      // held at the scan's value (the masks are then known: linear unknowns again).
+      full = untyped[level.conditional_on];
+      for (const ConditionalChoice& choice : conditional_choices) {
+        Param threshold;
+        threshold.value = choice.threshold_m;
+        threshold.present = threshold.has_value = true;
+        full.bond_types[choice.type].param(choice.lower ? kMinDistance : kMaxDistance) = threshold;
+      }
     } else {
       // Pairs the screening of an earlier level found start as candidates here.
       addCandidateBonds(&full, std::vector<std::pair<int, int>>(all_candidates.begin(), all_candidates.end()),
@@ -1002,6 +1110,8 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
     level_ee.linearize_rest_length = nonlinear;
     if (nonlinear) full = nonlinearCandidates(full, fit, ee, first_candidate_type);
     Model kept_untyped;
+    double level_sigma2 = 0.0;
+    size_t level_rows = 0;
     std::string signature;
     std::vector<Group> groups;
     int screening_rounds = 0;
@@ -1076,7 +1186,7 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       // Bonds the neighbourhoods missed (long ones): pairs the residual asks for become
       // candidates too, and the selection runs again (at most 4 rounds of 20). Before the
       // non-physical drops: a missing bond makes true ones come out wrong.
-      if (!nonlinear && screening_rounds < 4 && pass + 1 < kMaxPasses) {
+      if (!nonlinear && !conditional && screening_rounds < 4 && pass + 1 < kMaxPasses) {
         std::set<std::pair<int, int>> have;
         for (const Bond& b : full.bonds)
           if (kindArity(full.bond_types[b.type].kind) == 2) have.insert(std::minmax(b.particles[0], b.particles[1]));
@@ -1158,9 +1268,13 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       cand.bic = chosen_bic;
       signature = structureSignature(solved.model, first_candidate_type);
       kept_untyped = solved.model;
+      level_sigma2 = sigma2;
+      level_rows = sys.rows;
       break;
     }
     untyped.push_back(kept_untyped);
+    base_sigma2.push_back(level_sigma2);
+    base_rows.push_back(level_rows);
     // A level that kept none of its new components has an earlier level's structure: not
     // refitted nor judged again (its figures are that level's).
     const size_t same = std::find(signatures.begin(), signatures.end(), signature) - signatures.begin();
@@ -1175,8 +1289,37 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       candidates.push_back(std::move(cand));
       untyped.back() = untyped[same];
     } else {
-      refitAndJudge(&cand, nonlinear, first_candidate_type);
+      refitAndJudge(&cand, nonlinear, conditional, first_candidate_type);
       candidates.push_back(std::move(cand));
+    }
+    // After the cumulative levels and the non-linear one: conditions on the best cumulative
+    // level's springs, where the one-step residual asks for a switch; then again on that
+    // conditional level's result while the residual asks for more (at most 4 rounds: a wrong
+    // condition on one bond biases its neighbours' fits, hiding theirs at first).
+    const bool first_round = level_index + 1 == cumulative_levels + (options.try_nonlinear ? 1 : 0);
+    const bool next_round = conditional && ++conditional_rounds < 4 &&
+                            candidates.back().same_as.empty();
+    if ((first_round || next_round) && options.try_conditional) {
+      int base = static_cast<int>(level_index);
+      if (first_round) {
+        std::vector<StructureCandidate> linear(candidates.begin(), candidates.begin() + cumulative_levels);
+        base = bestCandidate(linear);
+        if (!candidates[base].same_as.empty())
+          base = static_cast<int>(std::find_if(candidates.begin(), candidates.end(),
+                                               [&](const StructureCandidate& c) { return c.name == candidates[base].same_as; }) -
+                                  candidates.begin());
+      }
+      const double price_m2 = base_sigma2[base] * std::log(static_cast<double>(std::max<size_t>(base_rows[base], 2)));
+      conditional_choices = conditionalCandidates(untyped[base], fit, first_candidate_type, 20.0 * price_m2);
+      say("structure: " + std::to_string(conditional_choices.size()) + " spring(s) of " + candidates[base].name +
+          " whose residual asks for a switching condition");
+      if (!conditional_choices.empty()) {
+        Level next{first_round ? candidates[base].name + "+conditional" : candidates[base].name,
+                   levels[base].dampers, levels[base].flexion, levels[base].viscosity};
+        if (!first_round) next.name += "+";
+        next.conditional_on = base;
+        levels.push_back(next);
+      }
     }
     // After the cumulative levels: the non-linear terms on the best of them.
     if (level_index + 1 == cumulative_levels && options.try_nonlinear) {

@@ -72,13 +72,13 @@ call() {  # call SERVICE PATH -> prints the response
 expect_refused() {  # expect_refused SERVICE PATH PATTERN
   local out; out=$(call "$1" "$2")
   echo "$1 '$2' -> $(echo "$out" | tr '\n' ' ' | cut -c1-200)"
-  echo "$out" | grep -q "success: False" || { echo "FAIL: $1 '$2' was not refused"; exit 1; }
-  echo "$out" | grep -q "$3" || { echo "FAIL: message lacks '$3'"; exit 1; }
+  grep -q "success: False" <<<"$out" || { echo "FAIL: $1 '$2' was not refused"; exit 1; }
+  grep -q "$3" <<<"$out" || { echo "FAIL: message lacks '$3'"; exit 1; }
 }
 expect_ok() {  # expect_ok SERVICE PATH
   local out; out=$(call "$1" "$2")
   echo "$1 '$2' -> $(echo "$out" | grep -E 'success|message' | tr '\n' ' ' | cut -c1-200)"
-  echo "$out" | grep -q "success: True" || { echo "FAIL: $1 '$2' was refused"; exit 1; }
+  grep -q "success: True" <<<"$out" || { echo "FAIL: $1 '$2' was refused"; exit 1; }
 }
 
 # 2. Live frames the node must survive: a topic of the wrong type (roscpp drops the
@@ -91,7 +91,7 @@ rostopic pub -1 /markers motion_model_estimation/MarkerFrame \
 sleep 1.5
 stats=$(rostopic echo -n 1 /estimator/stats)
 echo "after a wrong type and two bad frames: $stats"
-echo "$stats" | grep -q "accepted=0 rejected=2 " || { echo "FAIL: unexpected ~stats"; exit 1; }
+grep -q "accepted=0 rejected=2 " <<<"$stats" || { echo "FAIL: unexpected ~stats"; exit 1; }
 kill -0 "${pids[1]}" || { echo "FAIL: estimator_node died"; cat "$tmp/estimator.log"; exit 1; }
 
 # 3. Service paths confined to ~model_dir.

@@ -67,7 +67,7 @@ sed '/^bond_types:/,$d' "$tmp/truth.yaml" >"$tmp/particles.yaml"
 "$bin/identify" --model "$tmp/particles.yaml" --trajectory "$tmp/long.trc" --out "$tmp/sel.yaml" \
   --select-structure >"$tmp/sel.log" 2>"$tmp/sel.err" ||
   { echo "identify --select-structure failed:"; cat "$tmp/sel.err"; exit 1; }
-grep -q "^springs,31,10,20,.*,1$" "$tmp/sel.yaml.structure.csv" ||
+grep -q "^springs,31,10,20,.*,1,1,$" "$tmp/sel.yaml.structure.csv" ||
   { echo "structure report:"; cat "$tmp/sel.yaml.structure.csv"; exit 1; }
 grep -q "^constant_velocity," "$tmp/sel.yaml.structure.csv"
 grep -q "^stopped: converged" "$tmp/sel.log"

@@ -14,6 +14,11 @@
 //    below the Bayesian information criterion's price of its parameters; a damper never outlives
 //    its bond. Bonds that come out non-physical are dropped and it runs again. A level that keeps
 //    none of its new components is the structure of an earlier one and is not refitted.
+//    Then, on the kept bonds of the best level so far, the non-linear level (a cubic stiffness
+//    per spring, a quadratic damping per damper; rest lengths linearised and iterated,
+//    Gauss-Newton), and the conditional level (on the best cumulative level's springs, a
+//    threshold where the one-step residual asks for the bond to switch off, by a scan over its
+//    frames sorted by length; in rounds while the residual asks for more).
 // 3. Bond typing: bonds of one kind whose solved values (k, L, c; k, theta0, c; c_v) agree within
 //    3 of their standard deviations share a type, kept when the criterion says the merged model
 //    is as good.
@@ -21,7 +26,6 @@
 //    fitted frames and judged on the held-out frames (the end of the window, never fitted): the
 //    open-loop prediction error 10 frames ahead decides, the criterion breaks ties (within 2 %).
 //
-// Non-linear and conditional components are not tried yet.
 #pragma once
 
 #include <cstdint>
@@ -48,6 +52,10 @@ struct StructureOptions {
   /// The non-linear level: on the kept bonds of the best level so far, a cubic stiffness per
   /// spring (and a quadratic damping per damper), rest lengths held at the linear fit's.
   bool try_nonlinear = true;
+  /// The conditional level: on the kept springs of the best cumulative level, a threshold
+  /// (min_distance or max_distance) where the one-step residual asks for the bond to switch off
+  /// (a cable, a contact), refined by identify's threshold search in the refit.
+  bool try_conditional = true;
   bool refit = true;              ///< refit each level with identifyModel (else equation error only)
   int refit_generations = 100;    ///< the ranking refit's generation budget per level
   double refit_max_s = 20.0;      ///< ... and wall time [s]
