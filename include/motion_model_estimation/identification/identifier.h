@@ -41,7 +41,8 @@ struct IdentifyOptions {
   bool estimate_std = true;      ///< finite-difference Hessian at the optimum
   /// Stop once converged: after a refinement has run, when the best cost fell by less than a
   /// relative 1e-4 over this many generations, or sits at the round-off floor (1e-26 m^2 per
-  /// residual). 0 = run the whole generation budget (the paper).
+  /// residual); twice this when a threshold (min/max_distance) is free. 0 = run the whole
+  /// generation budget (the paper).
   int patience_generations = 50;
   /// Seed the population with the equation-error solution (equation_error.h) where it applies,
   /// widening default bounds that exclude it.
