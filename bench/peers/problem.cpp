@@ -343,13 +343,8 @@ mme::Model makeCableObject(int bond_types, int cable_types, int particles, int b
   spec.bonds = bonds;
   spec.frame_rate_hz = rate_hz;
   spec.seed = seed;
-  mme::Model model = mme::makeRandomObject(spec);
-  for (int t = 0; t < std::min(cable_types, bond_types); ++t) {
-    mme::BondType& type = model.bond_types[t];
-    const double length = type.value(mme::kRestLength);
-    type.param(mme::kMinDistance) = freeParam(length, length / 2.0, length * 2.0);
-  }
-  return model;
+  spec.cable_types = cable_types;
+  return mme::makeRandomObject(spec);
 }
 
 }  // namespace bench

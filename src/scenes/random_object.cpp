@@ -115,6 +115,8 @@ Model makeRandomObject(const RandomObjectSpec& spec) {
       const double k_nl = (0.5 + 0.5 * random.uniform()) * spec.stiffness_nl_scale * k / (length * length);
       type.param(kStiffnessNl) = Param{k_nl, true, true, true, k_nl / 10.0, k_nl * 10.0, true, true};
     }
+    if (t < spec.cable_types)
+      type.param(kMinDistance) = Param{length, true, true, true, length / 2.0, length * 2.0, true, true};
     model.bond_types.push_back(type);
   }
   return model;

@@ -118,6 +118,12 @@ Model smallObject() {
   return m;
 }
 
+Model particlesOnly(Model model) {
+  model.bonds.clear();
+  model.bond_types.clear();
+  return model;
+}
+
 Model withoutValues(Model model) {
   for (const ParamRef& r : freeParameters(model)) paramOf(model, r).has_value = false;
   return model;

@@ -50,6 +50,8 @@ Model muscleObject();
 Model smallObject();
 /// The model as identification sees it: every free parameter's value forgotten (bounds kept).
 Model withoutValues(Model model);
+/// The particles of `model` alone (no bond, no bond type): what structure selection starts from.
+Model particlesOnly(Model model);
 /// The model with every bound of every free parameter removed (the defaults must do).
 Model withoutBounds(Model model);
 /// smallObject() as the identification tests use it: the truth, the model without values,

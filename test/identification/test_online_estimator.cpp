@@ -111,9 +111,7 @@ namespace {
 // the same window.
 TEST(OnlineEstimator, WaitsForAStructureWithTheParticlesAlone) {
   Fixture f;
-  mme::Model particles = f.truth;
-  particles.bonds.clear();
-  particles.bond_types.clear();
+  const mme::Model particles = mme::test::particlesOnly(f.truth);
   mme::OnlineEstimatorOptions options;
   options.window_frames = 60;
   EXPECT_THROW(mme::OnlineEstimator refused(particles, options), mme::InputError);

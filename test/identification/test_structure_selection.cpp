@@ -15,15 +15,17 @@
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/structure_selection.h"
 #include "motion_model_estimation/scenes/random_object.h"
+#include "test_helpers.h"
 
 namespace {
 
-/// The particles of `truth` alone (no bond, no type).
-mme::Model particlesOnly(const mme::Model& truth) {
-  mme::Model m = truth;
-  m.bonds.clear();
-  m.bond_types.clear();
-  return m;
+using mme::test::particlesOnly;
+
+/// The candidate the selection chose (null when none is marked).
+const mme::StructureCandidate* chosenOf(const mme::StructureResult& r) {
+  for (const mme::StructureCandidate& c : r.candidates)
+    if (c.chosen) return &c;
+  return nullptr;
 }
 
 mme::StructureResult select(const mme::Model& truth, int frames) {
@@ -92,9 +94,7 @@ void checkChainSelection(double damping_max_nspm, uint64_t seed) {
   EXPECT_EQ(c.viscosity_bonds, 0);
   EXPECT_TRUE(damping_max_nspm > 0.0 ? c.damped_everywhere : c.damped_nowhere);
   EXPECT_LT(c.max_relative_error, 0.01);
-  const mme::StructureCandidate* chosen = nullptr;
-  for (const mme::StructureCandidate& cand : r.candidates)
-    if (cand.chosen) chosen = &cand;
+  const mme::StructureCandidate* chosen = chosenOf(r);
   ASSERT_NE(chosen, nullptr);
   EXPECT_NE(chosen->name.find("flexion"), std::string::npos);
   EXPECT_TRUE(chosen->same_as.empty());
@@ -125,9 +125,7 @@ TEST(StructureSelection, CubicStiffnessIsFoundByTheNonLinearLevel) {
     EXPECT_EQ(c.types, 4);
     EXPECT_TRUE(c.damped_nowhere);
     EXPECT_LT(c.max_relative_error, 0.01);
-    const mme::StructureCandidate* chosen = nullptr;
-    for (const mme::StructureCandidate& cand : r.candidates)
-      if (cand.chosen) chosen = &cand;
+    const mme::StructureCandidate* chosen = chosenOf(r);
     ASSERT_NE(chosen, nullptr);
     // The non-linear level on the best linear level's candidates (which may hold dampers or
     // drags that the cubic terms then make unnecessary).
@@ -149,27 +147,21 @@ TEST(StructureSelection, ConditionalLevelFindsCables) {
     spec.bonds = 31;
     spec.frame_rate_hz = 100.0;
     spec.seed = seed;
-    mme::Model truth = mme::makeRandomObject(spec);
+    spec.cable_types = 2;
+    const mme::Model truth = mme::makeRandomObject(spec);
     std::set<std::pair<std::string, std::string>> cables;
     for (const mme::Bond& b : truth.bonds)
       if (b.type < 2) {
         std::string x = truth.particles[b.particles[0]].name, y = truth.particles[b.particles[1]].name;
         cables.insert({std::min(x, y), std::max(x, y)});
       }
-    for (int t = 0; t < 2; ++t) {
-      mme::BondType& type = truth.bond_types[t];
-      const double length = type.value(mme::kRestLength);
-      type.param(mme::kMinDistance) = {length, true, true, true, length / 2.0, length * 2.0, true, true};
-    }
     const mme::StructureResult r = select(truth, 240);
     SCOPED_TRACE("seed " + std::to_string(seed) + "\n" + mme::formatStructureReport(r));
-    const mme::StructureCandidate* chosen = nullptr;
+    const mme::StructureCandidate* chosen = chosenOf(r);
     double best_unconditional = std::numeric_limits<double>::infinity();
-    for (const mme::StructureCandidate& c : r.candidates) {
-      if (c.chosen) chosen = &c;
+    for (const mme::StructureCandidate& c : r.candidates)
       if (c.name.find("conditional") == std::string::npos)
         best_unconditional = std::min(best_unconditional, c.held_out_rms_m[2]);
-    }
     ASSERT_NE(chosen, nullptr);
     EXPECT_NE(chosen->name.find("+conditional"), std::string::npos);
     EXPECT_LT(chosen->held_out_rms_m[2], 0.2 * best_unconditional);

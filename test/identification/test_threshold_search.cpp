@@ -24,13 +24,8 @@ mme::Model cableObject(int cables, uint64_t seed) {
   spec.bonds = 31;
   spec.frame_rate_hz = 100.0;
   spec.seed = seed;
-  mme::Model model = mme::makeRandomObject(spec);
-  for (int t = 0; t < cables; ++t) {
-    mme::BondType& type = model.bond_types[t];
-    const double length = type.value(mme::kRestLength);
-    type.param(mme::kMinDistance) = {length, true, true, true, length / 2.0, length * 2.0, true, true};
-  }
-  return model;
+  spec.cable_types = cables;
+  return mme::makeRandomObject(spec);
 }
 
 struct Fixture {

@@ -6,6 +6,7 @@
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/live/structure_job.h"
 #include "motion_model_estimation/scenes/random_object.h"
+#include "test_helpers.h"
 
 namespace {
 
@@ -22,9 +23,7 @@ TEST(StructureJob, SelectsOnceTheWindowIsLongEnoughAndAgainOnRequest) {
   spec.bond_types = 3;
   spec.bonds = 16;
   const mme::Model truth = mme::makeRandomObject(spec);
-  mme::Model particles = truth;
-  particles.bonds.clear();
-  particles.bond_types.clear();
+  const mme::Model particles = mme::test::particlesOnly(truth);
   const mme::Trajectory data = mme::simulateTrajectory(truth, 120, truth.frame_rate_hz);
   mme::StructureJob job(particles, quickOptions(), 100);
   EXPECT_EQ(job.minFrames(), 100);
@@ -55,9 +54,7 @@ TEST(StructureJob, AnUnusableWindowFailsWithTheReason) {
   spec.bond_types = 2;
   spec.bonds = 8;
   const mme::Model truth = mme::makeRandomObject(spec);
-  mme::Model particles = truth;
-  particles.bonds.clear();
-  particles.bond_types.clear();
+  const mme::Model particles = mme::test::particlesOnly(truth);
   mme::Trajectory data = mme::simulateTrajectory(truth, 60, truth.frame_rate_hz);
   // Every sample of the window occluded: no candidate pair.
   for (auto& o : data.occluded) o = 1;

@@ -20,6 +20,9 @@ struct RandomObjectSpec {
   /// > 0: every type also has a free cubic stiffness k_nl = u * this * k / L^2 (u uniform in
   /// [0.5, 1]; hardening: at a strain of 10 % it adds u * this % to the tension) [1].
   double stiffness_nl_scale = 0.0;
+  /// The first this many types are cables: active only when stretched beyond their rest length
+  /// (a free min_distance, true value = the rest length, bounds [L/2, 2L]).
+  int cable_types = 0;
   uint64_t seed = 1;
 };
 
