@@ -24,6 +24,7 @@ namespace {
 
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 constexpr double kPi = 3.14159265358979323846;
+constexpr double kRoundOffFloorM = 1e-10;  ///< an equation-error residual below this is exact
 constexpr int kHorizons[3] = {1, 5, 10};
 constexpr int kMaxPasses = 12;  ///< solves per level (non-physical drops, screening rounds)
 
@@ -1057,8 +1058,10 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       std::vector<int> all = activeColumns(groups, always);
       const Eigen::VectorXd theta_all = solveActive(sys, all, nullptr, nullptr);
       const double rms_b = std::sqrt(sys.btb / std::max<size_t>(sys.rows, 1));
-      // Round-off of the equation error (conditioning included) on exact data: 1e-6 of the rows' RMS.
-      const double floor2 = std::pow(1e-6 * rms_b, 2);
+      // Round-off of the equation error (conditioning included) on exact data: 1e-6 of the rows' RMS,
+      // 1e-10 m at least: no capture resolves a tenth of a nanometre, and a small motion's
+      // rhs (micrometres) would otherwise put the floor below the solves' own round-off.
+      const double floor2 = std::pow(std::max(1e-6 * rms_b, kRoundOffFloorM), 2);
       const double dof = std::max(1.0, static_cast<double>(sys.rows) - static_cast<double>(all.size()));
       const double sigma2 = std::max(rss(sys, theta_all) / dof, floor2);
       {
