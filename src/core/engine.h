@@ -249,6 +249,7 @@ inline double flexionEnergyRaw(const FlexionLaw& law, const double* xa, const do
 
 SpringLaw springLawOf(const BondType& type);
 FlexionLaw flexionLawOf(const BondType& type);
+FloorLaw floorLawOf(const BondType& type);
 
 // ------------------------------------------------------------------ compiled model
 

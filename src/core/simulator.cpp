@@ -42,12 +42,7 @@ SpringLaw springLawOf(const BondType& type) {
 }
 
 FloorLaw floorLawOf(const BondType& type) {
-  FloorLaw law;
-  law.stiffness = type.value(kStiffness);
-  law.damping = type.value(kDamping);
-  law.friction = type.value(kFriction);
-  law.height = type.value(kHeight);
-  return law;
+  return {type.value(kStiffness), type.value(kDamping), type.value(kFriction), type.value(kHeight)};
 }
 
 FlexionLaw flexionLawOf(const BondType& type) {

@@ -582,12 +582,13 @@ class Loader {
                    std::to_string(pos->second) + ")" + where);
       }
       if (bondKindInfo(type.kind).network) {
-        if (!inputs_e)
+        if (inputs_e)
+          pending.push_back({model.bonds.size(), inputs_e, where});
+        else if (type.network_inputs > 0)  // a muscle reading nothing may leave the key out
           fail(lineOf(item), "inputs",
                "a muscle bond (type '" + type.name + "') names its " +
                    std::to_string(type.network_inputs) + " input bond(s): inputs: [bond names]" +
                    where);
-        pending.push_back({model.bonds.size(), inputs_e, where});
       } else if (inputs_e) {
         fail(lineOf(inputs_e->key_node), "inputs",
              std::string("only muscle bonds have inputs (type '") + type.name + "' is a " +

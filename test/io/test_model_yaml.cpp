@@ -634,6 +634,12 @@ TEST(ModelYamlErrors, BadMuscleDefinitions) {
               "rest_length, damping, gain, inputs, hidden, and the network's "
               "w1_<0..0>_<0..3>, b1_<0..0>, w2_<0..0>, b2 (inputs 2, hidden 1))");
   expectError(muscleEdited(15, "    hidden: 40"), 15, "hidden", "must be in [0, 32]");
+  // A muscle reading no bond (a constant activation gain tanh(b2)) needs no inputs key.
+  std::string constant = muscleEdited(14, "    inputs: 0");
+  constant = constant.substr(0, constant.find("    w1_0_0")) + "bonds: [{type: m, particles: [a, c]}]\n";
+  const Model c = loadModelString(constant, "constant.yaml");
+  EXPECT_TRUE(c.bonds[0].inputs.empty());
+  EXPECT_EQ(c.bond_types[2].network.size(), 3u);  // hidden 1, no input: b1_0, w2_0, b2
   expectError(muscleEdited(14, "    inputs: -1"), 14, "inputs", "must be in [0, 16]");
   expectError(muscleEdited(12, "    stiffness_nl: 3"), 12, "stiffness_nl", "unknown key for a muscle");
 }
