@@ -4,6 +4,8 @@
 //   table2.csv   fluid_jet
 //   scaling.csv  generations to 0.01% error against the number of bond types (random objects)
 //   summary.csv  one line per experiment (errors, generations, wall time)
+//   fig5.csv     log cost against generations without muscles, with dampers, with muscles
+//                (walker and real recordings; fig5_summary.csv: held-out prediction errors)
 // Also: `bench_paper compare TRUTH.yaml ESTIMATE.yaml` prints per-parameter errors.
 #include <algorithm>
 #include <chrono>
@@ -19,6 +21,8 @@
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/identification/muscle_placement.h"
+#include "motion_model_estimation/identification/prediction_error.h"
 #include "motion_model_estimation/identification/structure_selection.h"
 #include "motion_model_estimation/identification/online_estimator.h"
 #include "motion_model_estimation/identification/output_error.h"
@@ -626,6 +630,131 @@ void structureExperiment(const Settings& s) {
   std::fclose(g);
 }
 
+/// The model with every spring type's damping taken away (`free_damping` false) or made free
+/// (true), values forgotten: the paper's "without muscles" and "with dampers" models.
+Model dampingVariant(Model m, bool free_damping) {
+  for (mme::BondType& type : m.bond_types) {
+    if (type.kind != mme::BondKind::kSpring) continue;
+    mme::Param& c = type.param(mme::kDamping);
+    c = mme::Param{};
+    if (free_damping) c.present = c.free = true;
+  }
+  return forgetFreeValues(m);
+}
+
+/// Fig. 5 of the paper (section 4.4): log cost against generations for the same bonds without
+/// muscles (springs), with dampers, and with muscles (every spring type a muscle reading its two
+/// nearest bonds, started from the dampers' fit: activation 0), on the walker and on the real
+/// recordings (structure chosen from the markers first). Each fit runs on the window's first
+/// 80 % and is judged on the rest: the 10-frame open-loop prediction error beside the model-free
+/// guesses. One cost for all (the paper's one-step cost), the whole generation budget each.
+void figure5(const Settings& s) {
+  std::FILE* f = openCsv(s.out_dir + "/fig5.csv",
+                         "case,variant,generation,chart_generation,evaluations,log10_cost,wall_s");
+  std::FILE* g = openCsv(s.out_dir + "/fig5_summary.csv",
+                         "case,variant,parameters,fitted_frames,held_out_frames,cost_m2,"
+                         "model_rms_10_m,constant_velocity_rms_10_m,constant_acceleration_rms_10_m,"
+                         "gravity_only_rms_10_m,bounded,wall_s");
+  const int generations = s.generations > 0 ? s.generations : (s.quick ? 10 : 100);
+  struct Case {
+    std::string name;
+    Model structure;  // the passive bonds, values known where the case has them
+    mme::Trajectory data;
+  };
+  std::vector<Case> cases;
+  {
+    const mme::Scene walker = mme::makeScene("walker");
+    cases.push_back({"walker", walker.model,
+                     mme::simulateTrajectory(walker.model, walker.default_frames,
+                                             walker.model.frame_rate_hz)});
+  }
+  mme::StructureOptions so;
+  so.identify = mme::identifyOptionsFor(mme::Preset::kDefault);
+  so.identify.es.threads = s.threads;
+  so.identify.estimate_std = false;
+  for (const char* file : {"motion_capture_walk.trc", "subject01_walk1.trc", "arm26_elbow_flex.trc",
+                           "Sample01_Eb015pi.c3d", "Sample26_Walking_Hybrid_1_1.c3d"}) {
+    if (s.quick && std::string(file) != "arm26_elbow_flex.trc") continue;
+    mme::Trajectory data = mme::readTrajectoryFile(std::string(MME_TEST_DATA_DIR) + "/real/" + file);
+    data = mme::sliceFrames(data, 0, std::min(data.numFrames(), 300));
+    const mme::StructureResult r = mme::selectStructure(rigidPairModel(data, 0), data, so);
+    cases.push_back({file, r.model, data});
+  }
+  for (Case& c : cases) {
+    const int frames = c.data.numFrames();
+    const int held_frames = std::max(15, static_cast<int>(std::lround(0.2 * frames)));
+    const int fit_frames = frames - held_frames;
+    const mme::Trajectory fit = mme::sliceFrames(c.data, 0, fit_frames);
+    const mme::Trajectory held = mme::sliceFrames(c.data, fit_frames - 2, held_frames + 2);
+    mme::IdentifyOptions o = mme::identifyOptionsFor(s.preset);
+    o.generations = generations;
+    o.patience_generations = 0;  // every curve the whole budget long
+    o.es.threads = s.threads;
+    o.es.seed = s.seed;
+    o.estimate_std = false;
+    o.cost = mme::CostChoice::kShortTerm;  // the paper's cost, one scale for the three curves
+    Model dampers_fit;
+    int dampers_generations = 0;
+    for (const char* variant : {"springs", "dampers", "muscles"}) {
+      const std::string v = variant;
+      // A case whose truth has muscles (a walking walker) gets its own controllers, from the
+      // priors; the others get muscles placed on the dampers' fit (muscle_placement.h).
+      const bool own_muscles = mme::muscleTypeCount(c.structure) > 0;
+      Model start;
+      if (v != "muscles") {
+        start = dampingVariant(mme::removeMuscles(c.structure), v == "dampers");
+      } else if (own_muscles) {
+        start = forgetFreeValues(c.structure);
+      } else {
+        start = mme::addMuscles(dampers_fit, &fit, mme::MusclePlacement{});
+        if (mme::muscleTypeCount(start) == 0) {
+          std::printf("fig5: %s: no spring type to turn into a muscle (the chosen structure has "
+                      "none)\n", c.name.c_str());
+          continue;
+        }
+      }
+      const int offset = v == "muscles" && !own_muscles ? dampers_generations : 0;
+      auto log = [&](const mme::Progress& p) {
+        if (!p.message.empty()) return;
+        // Placed muscles continue from the dampers' fit: on the chart, after its generations.
+        const int chart = p.generation + offset;
+        std::fprintf(f, "%s,%s,%d,%d,%llu,%.6f,%.3f\n", c.name.c_str(), variant, p.generation,
+                     chart, static_cast<unsigned long long>(p.evaluations),
+                     std::log10(std::max(p.best_cost, 1e-300)), p.wall_time_s);
+      };
+      const mme::IdentifyResult r = mme::identifyModel(start, fit, o, log);
+      std::fflush(f);
+      Model fitted = start;
+      mme::setValues(fitted, r.parameters, r.values);
+      if (v == "dampers") {
+        dampers_fit = fitted;
+        dampers_generations = r.generations;
+      }
+      double rms[4] = {NAN, NAN, NAN, NAN};
+      bool bounded = false;
+      try {
+        const mme::PredictionReport pr = mme::evaluatePredictions(fitted, held, {10});
+        for (const mme::PredictionError& row : pr.rows) rms[static_cast<int>(row.predictor)] = row.rms_m;
+        bounded = pr.rollout_bounded;
+      } catch (const mme::InputError& e) {
+        std::printf("fig5: %s %s: %s\n", c.name.c_str(), variant, e.what());
+      }
+      std::fprintf(g, "%s,%s,%zu,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%.2f\n", c.name.c_str(), variant,
+                   r.parameters.size(), fit_frames, held_frames, r.global_cost, rms[0], rms[1],
+                   rms[2], rms[3], bounded ? 1 : 0, r.wall_time_s);
+      std::fflush(g);
+      std::printf("fig5: %s %s: %zu parameters, cost %.4g m^2 after %d generations; 10 frames "
+                  "ahead on held-out frames: model %.2f mm, constant velocity %.2f mm, constant "
+                  "acceleration %.2f mm, gravity only %.2f mm; rollout %s; %.1f s\n",
+                  c.name.c_str(), variant, r.parameters.size(), r.global_cost, r.generations,
+                  1e3 * rms[0], 1e3 * rms[1], 1e3 * rms[2], 1e3 * rms[3],
+                  bounded ? "bounded" : "UNBOUNDED", r.wall_time_s);
+    }
+  }
+  std::fclose(f);
+  std::fclose(g);
+}
+
 int compare(const std::string& truth_path, const std::string& estimate_path) {
   const Model truth = mme::loadModelFile(truth_path);
   const Model estimate = mme::loadModelFile(estimate_path);
@@ -670,7 +799,7 @@ int main(int argc, char** argv) {
       else if (a == "--seed" && i + 1 < argc) s.seed = std::strtoull(argv[++i], nullptr, 10);
       else {
         std::fprintf(stderr, "usage: bench_paper [--quick] [--out-dir DIR] [--threads T] "
-                             "[--only fig1,table1,table2,scaling,random18,defaults,accuracy,online,structure]\n"
+                             "[--only fig1,table1,table2,scaling,random18,defaults,accuracy,online,structure,fig5]\n"
                              "       [--generations N] [--refine-start G] [--refine-period G]\n"
                              "       [--refine-evaluations E] [--refine ALGORITHM] [--seed S]\n"
                              "       [--preset paper|default] (default: paper)\n"
@@ -691,6 +820,7 @@ int main(int argc, char** argv) {
     if (s.wants("accuracy")) accuracyExperiment(s);
     if (s.wants("online")) onlineExperiment(s);
     if (s.wants("structure")) structureExperiment(s);
+    if (s.wants("fig5")) figure5(s);
     if (s.wants("table1")) table1(s);
     if (s.wants("fig1")) figure1(s);
     if (s.wants("table2")) table2(s);

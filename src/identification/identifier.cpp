@@ -34,6 +34,7 @@ IdentifyOptions identifyOptionsFor(Preset preset) {
     // The paper's method as it was: random starts, its bounds, its cost, the whole budget.
     o.patience_generations = 0;
     o.equation_error_start = false;
+    o.values_start = false;
     o.max_bound_widenings = 0;
     o.cost = CostChoice::kShortTerm;
   }
@@ -131,6 +132,35 @@ std::vector<std::pair<size_t, int>> widenableAtBound(const ParameterSpace& space
 /// Equation-error starts (raw and smoothed differences) as gene vectors; a value outside a
 /// default bound widens it (beyond a user's bound it is clamped), an undetermined one is left
 /// at the initial distribution's centre. Notes what it widened.
+/// Physical values -> one individual's genes, for a seed of the first population: a value outside
+/// a default (not user-given) bound widens that bound to include it (and says so); unusable
+/// values (non-finite, not positive on a log scale, a clamp-length gene) take the initial centre.
+std::vector<double> seedGenes(const std::vector<double>& values, const std::string& what,
+                              ParameterSpace* space, std::vector<std::string>* notes) {
+  std::vector<double> genes(space->size());
+  for (size_t k = 0; k < space->size(); ++k) {
+    const Gene& g = space->gene(k);
+    const double v = values[k];
+    const bool usable = std::isfinite(v) && (!g.log_scale || v > 0.0) && !g.clamp_length;
+    if (!usable) {
+      genes[k] = g.init_center;
+      continue;
+    }
+    const double gene = g.log_scale ? std::log(v) : v;
+    double lo = g.lower, hi = g.upper;
+    const double margin = g.log_scale ? std::log(3.0) : 0.5 * (hi - lo);
+    if (gene < lo && !g.user_lower) lo = gene - margin;
+    if (gene > hi && !g.user_upper) hi = gene + margin;
+    if (lo != g.lower || hi != g.upper) {
+      notes->push_back("'" + g.ref.name + "': " + what + " " + formatValue(v) +
+                       " lies outside the default search bounds: bounds widened to include it");
+      space->setBounds(k, lo, hi);
+    }
+    genes[k] = std::min(std::max(gene, space->gene(k).lower), space->gene(k).upper);
+  }
+  return genes;
+}
+
 std::vector<std::vector<double>> equationErrorSeeds(const Model& model, const Trajectory& trajectory,
                                                     ParameterSpace* space,
                                                     std::vector<std::string>* notes) {
@@ -159,28 +189,7 @@ std::vector<std::vector<double>> equationErrorSeeds(const Model& model, const Tr
       if (!ee.applicable) break;
     }
     if (!ee.applicable) break;
-    std::vector<double> genes(space->size());
-    for (size_t k = 0; k < space->size(); ++k) {
-      const Gene& g = space->gene(k);
-      const double v = ee.values[k];
-      const bool usable = std::isfinite(v) && (!g.log_scale || v > 0.0) && !g.clamp_length;
-      if (!usable) {
-        genes[k] = g.init_center;
-        continue;
-      }
-      const double gene = g.log_scale ? std::log(v) : v;
-      double lo = g.lower, hi = g.upper;
-      const double margin = g.log_scale ? std::log(3.0) : 0.5 * (hi - lo);
-      if (gene < lo && !g.user_lower) lo = gene - margin;
-      if (gene > hi && !g.user_upper) hi = gene + margin;
-      if (lo != g.lower || hi != g.upper) {
-        notes->push_back("'" + g.ref.name + "': the equation-error start " + formatValue(v) +
-                         " lies outside the default search bounds: bounds widened to include it");
-        space->setBounds(k, lo, hi);
-      }
-      genes[k] = std::min(std::max(gene, space->gene(k).lower), space->gene(k).upper);
-    }
-    seeds.push_back(std::move(genes));
+    seeds.push_back(seedGenes(ee.values, "the equation-error start", space, notes));
   }
   return seeds;
 }
@@ -254,6 +263,16 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
   std::vector<std::vector<double>> seeds;
   if (options.equation_error_start)
     seeds = equationErrorSeeds(model, trajectory, &space, &seed_notes);
+  if (options.values_start) {
+    // A complete guess (every free parameter with a value, e.g. a model identified before) is
+    // one individual of the first population as it is: the search never ends worse than it.
+    const std::vector<ParamRef> refs = freeParameters(model);
+    bool complete = !refs.empty();
+    for (const ParamRef& r : refs) complete = complete && paramOf(model, r).has_value;
+    if (complete)
+      seeds.insert(seeds.begin(), seedGenes(getValues(model, refs), "the model's value", &space,
+                                            &seed_notes));
+  }
   auto elapsed = [&start]() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };

@@ -9,7 +9,9 @@
 #include "cli_args.h"
 #include "trajectory_input.h"
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/muscle.h"
 #include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/identification/muscle_placement.h"
 #include "motion_model_estimation/identification/structure_selection.h"
 #include "motion_model_estimation/io/model_yaml.h"
 
@@ -23,7 +25,8 @@ const char* kUsage =
     "                [--preset default|paper] [--patience G]\n"
     "                [--cost auto|short_term|output_error] [--segment-frames K]\n"
     "                [--refine bobyqa|newuoa|praxis|levenberg_marquardt] [--refine-start G]\n"
-    "                [--refine-period G] [--select-structure]\n";
+    "                [--refine-period G] [--select-structure]\n"
+    "                [--add-muscles INPUTS] [--muscle-hidden H]\n";
 
 std::string formatMetres(double m) {
   char text[32];
@@ -35,7 +38,8 @@ int run(int argc, char** argv) {
   mme::CliArgs args(argc, argv,
                     {"model", "trajectory", "topic", "out", "method", "generations", "population",
                      "window-frames", "first-frame", "frames", "seed", "threads", "target-cost",
-                     "max-time-s", "refine", "refine-start", "refine-period", "preset", "patience", "cost", "segment-frames"},
+                     "max-time-s", "refine", "refine-start", "refine-period", "preset", "patience", "cost", "segment-frames",
+                     "add-muscles", "muscle-hidden"},
                     {"compare-to-model", "quiet", "help", "select-structure"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -115,6 +119,26 @@ int run(int argc, char** argv) {
     mme::writeFileAtomically(report_path, mme::structureReportCsv(selected));
     std::printf("identify: wrote %s\n", report_path.c_str());
     model = selected.model;
+  }
+  if (args.has("add-muscles") || args.has("muscle-hidden")) {
+    // Muscles on the passive model (muscle_placement.h): every spring type becomes a muscle type
+    // whose bonds read their nearest bonds, starting silent from the passive values.
+    if (compare)
+      throw mme::InputError("--compare-to-model and --add-muscles do not go together (the muscles "
+                            "are not the file's)");
+    mme::MusclePlacement placement;
+    placement.inputs = static_cast<int>(args.getInt("add-muscles", 2, 0, mme::kMaxMuscleInputs));
+    placement.hidden = static_cast<int>(args.getInt("muscle-hidden", 0, 0, mme::kMaxMuscleHidden));
+    model = mme::addMuscles(model, &trajectory, placement);
+    const int muscles = mme::muscleTypeCount(model);
+    int reads = 0;
+    for (const mme::BondType& type : model.bond_types)
+      if (type.kind == mme::BondKind::kMuscle) reads = type.network_inputs;
+    if (muscles == 0)
+      throw mme::InputError("--add-muscles: the model has no spring type that can become a muscle "
+                            "(plain springs: no threshold, no cubic term, not an interaction)");
+    std::printf("identify: %d spring type(s) became muscles reading %d bond(s) each, %d hidden "
+                "unit(s)\n", muscles, reads, placement.hidden);
   }
 
   const bool tty = isatty(STDOUT_FILENO);

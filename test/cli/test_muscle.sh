@@ -52,4 +52,34 @@ set -e
 [ "$rc" -eq 2 ] || { echo "simulate: expected exit 2, got $rc"; exit 1; }
 grep -q "key 'w1_0_0': unknown key for a muscle in bond type 'm'" "$tmp/bad2.err" ||
   { echo "unexpected error: $(cat "$tmp/bad2.err")"; exit 1; }
-echo "muscle: README example simulated, identified, exported and reloaded; bad definitions refused"
+# Muscles on a passive model (--add-muscles): the README example's bonds, all passive (the muscle
+# a plain spring, every spring part free with the file's values as guesses), fitted to the
+# muscle's motion; then every spring type a muscle started from that fit: the cost falls (a
+# warm start never loses the passive fit), the export names the inputs and simulates.
+sed -e '/^  - name: m$/,/^    b2:/c\  - {name: m, kind: spring, stiffness: {value: 40, free: true}, rest_length: {value: 0.25, free: true}, damping: {value: 0.2, free: true}}' \
+    -e 's/, inputs: \[upper, lower\]//' "$tmp/muscle.yaml" >"$tmp/passive.yaml"
+! grep -q "kind: muscle" "$tmp/passive.yaml"
+cost() { sed -n 's/^global cost \([^ ]*\) m^2.*/\1/p' "$1"; }
+"$bin/identify" --model "$tmp/passive.yaml" --trajectory "$tmp/data.trc" --out "$tmp/passive_fit.yaml" \
+  --cost short_term >"$tmp/passive.log" 2>"$tmp/passive.err"
+"$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/muscled.yaml" \
+  --cost short_term --add-muscles 2 >"$tmp/muscled.log" 2>"$tmp/muscled.err"
+grep -q "^identify: 3 spring type(s) became muscles reading 2 bond(s) each, 0 hidden unit(s)" "$tmp/muscled.log" ||
+  { echo "no placement line:"; head -5 "$tmp/muscled.log"; exit 1; }
+awk -v p="$(cost "$tmp/passive.log")" -v m="$(cost "$tmp/muscled.log")" 'BEGIN {
+  printf "muscle: passive cost %g m^2, with muscles %g m^2\n", p, m; exit !(p > 0 && m < 0.5 * p) }'
+[ "$(grep -c "kind: muscle" "$tmp/muscled.yaml")" -eq 3 ]
+grep -q "inputs: \[" "$tmp/muscled.yaml"
+"$bin/simulate" --model "$tmp/muscled.yaml" --frames 20 --out "$tmp/muscled.trc" >/dev/null
+# Out of range or nothing to place: exit 2 and the reason.
+for bad in "--add-muscles 17|--add-muscles must be" "--muscle-hidden -1|--muscle-hidden must be"; do
+  set +e
+  "$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/x.yaml" \
+    ${bad%%|*} 2>"$tmp/bad3.err" >/dev/null
+  rc=$?
+  set -e
+  [ "$rc" -eq 2 ] && grep -q -- "${bad#*|}" "$tmp/bad3.err" ||
+    { echo "${bad%%|*}: exit $rc, $(cat "$tmp/bad3.err")"; exit 1; }
+done
+
+echo "muscle: README example simulated, identified, exported and reloaded; bad definitions refused; muscles placed on a passive fit lower its cost"

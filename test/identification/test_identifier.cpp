@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/identifier.h"
 #include "motion_model_estimation/scenes/random_object.h"
@@ -30,6 +31,30 @@ TEST(Identifier, DefaultEngineIdentifiesAHangingObjectWithoutBoundsAndStopsOnceC
   EXPECT_EQ(r.stop, mme::IdentifyStop::kConverged);
   EXPECT_LT(r.generations, 100);
   for (mme::ParameterFlag flag : r.flags) EXPECT_EQ(flag, mme::ParameterFlag::kNone);
+}
+
+// A complete guess in the model (every free value given, e.g. an earlier fit) is an individual of
+// the first population as it is: with no equation-error start, no refinement and one generation,
+// the search ends no worse than the guess; without the values start it ends far worse.
+TEST(Identifier, ACompleteGuessIsNeverLost) {
+  Hanging h;
+  mme::Trajectory noisy = h.data;
+  mme::addGaussianNoise(&noisy, 1e-4, 3);
+  mme::Model guess = h.truth;  // the truth's values: the best the noisy data allow, nearly
+  const mme::ShortTermCost cost(guess, noisy);
+  const double guess_cost = cost.evaluate(h.true_values, nullptr);
+  mme::IdentifyOptions options = mme::identifyOptionsFor(mme::Preset::kDefault);
+  options.estimate_std = false;
+  options.equation_error_start = false;
+  options.es.refine_start_generation = 1000;
+  options.generations = 1;
+  options.cost = mme::CostChoice::kShortTerm;
+  options.max_bound_widenings = 0;
+  const mme::IdentifyResult kept = mme::identifyModel(guess, noisy, options);
+  EXPECT_LE(kept.global_cost, guess_cost);
+  options.values_start = false;
+  const mme::IdentifyResult drawn = mme::identifyModel(guess, noisy, options);
+  EXPECT_GT(drawn.global_cost, 2.0 * guess_cost);
 }
 
 // Without the equation-error start the rest lengths (2.4-20x shorter than observed) lie below

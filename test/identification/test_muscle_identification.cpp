@@ -5,11 +5,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/equation_error.h"
 #include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/identification/muscle_placement.h"
 #include "motion_model_estimation/identification/parameter_space.h"
 #include "test_helpers.h"
 
@@ -71,33 +73,40 @@ TEST(MuscleIdentification, TheEquationErrorLeavesMuscleParametersToTheSearch) {
 
 // The muscle's spring part, gain and network (9 parameters, no initial values) from 80 noiseless
 // frames. Fitting a network is multimodal: from 6 seeds, 3 (1, 4, 6) recover every parameter to
-// round-off and the others stall in local minima (costs 1e-6..4e-4 m^2), every one of them still
-// far below the best passive model (the muscle as a plain spring, 2e-3 m^2). The test asserts
-// exactly that; the default seed is one that recovers.
+// round-off and the others stall in local minima (one-step costs 1.4e-7..1.7e-6 m^2), every one
+// below the best passive model (the muscle as a plain spring, linear: the equation error solves
+// it; 3.0e-6 m^2) but the worst by less than 2x: where a passive fit exists, start the muscles
+// from it (muscle_placement.h; test_muscle_placement). Every fit here is on the one-step cost (the
+// automatic choice may switch a misfitting model to the output error, a cost on another scale).
+// The test asserts exactly that; the default seed is one that recovers.
 TEST(MuscleIdentification, TheEvolutionStrategyIdentifiesAMuscleFromNoInitialValues) {
   const Model truth = freeMuscle(true);
   const mme::Trajectory data = mme::simulateTrajectory(truth, 80, 100.0);
   const std::vector<double> want = mme::getValues(truth, mme::freeParameters(truth));
   ASSERT_EQ(want.size(), 9u);
 
-  Model passive = mme::test::muscleObject();
+  Model passive = mme::removeMuscles(mme::test::muscleObject());
   mme::BondType& t = passive.bond_types[passive.bondTypeIndex("m")];
-  t.param(mme::kGain).value = 0.0;
   for (mme::ParamId id : {mme::kStiffness, mme::kRestLength, mme::kDamping}) t.param(id).free = true;
   mme::IdentifyOptions passive_options;
   passive_options.generations = 400;
   passive_options.estimate_std = false;
+  // One cost for every fit compared: the one-step cost (kAuto may take the passive model's misfit
+  // for marker noise and switch to the output error, a cost on another scale).
+  passive_options.cost = mme::CostChoice::kShortTerm;
   const double passive_cost =
       mme::identifyModel(mme::test::withoutValues(passive), data, passive_options).global_cost;
-  EXPECT_GT(passive_cost, 1e-3);
+  EXPECT_GT(passive_cost, 1e-6);
+  EXPECT_LT(passive_cost, 1e-5);
 
-  int recovered = 0;
+  int recovered = 0, below_passive = 0;
   for (uint64_t seed = 1; seed <= 6; ++seed) {
     mme::IdentifyOptions options;
     options.generations = 400;
     options.patience_generations = 0;  // a network's fit keeps improving after plateaus
     options.es.seed = seed;
     options.estimate_std = false;
+    options.cost = mme::CostChoice::kShortTerm;
     const mme::IdentifyResult r = mme::identifyModel(mme::test::withoutValues(truth), data, options);
     const double error = mme::test::maxRelativeError(r.values, want);
     SCOPED_TRACE("seed " + std::to_string(seed) + ": cost " + std::to_string(r.global_cost) +
@@ -107,9 +116,10 @@ TEST(MuscleIdentification, TheEvolutionStrategyIdentifiesAMuscleFromNoInitialVal
       EXPECT_LT(r.global_cost / data.numFrames(), 1e-26);
     }
     recovered += error < 1e-6;
-    EXPECT_LT(r.global_cost, 0.25 * passive_cost);
+    below_passive += r.global_cost < passive_cost;
   }
   EXPECT_GE(recovered, 3);
+  EXPECT_EQ(below_passive, 6);
 }
 
 }  // namespace

@@ -47,6 +47,11 @@ struct IdentifyOptions {
   /// Seed the population with the equation-error solution (equation_error.h) where it applies,
   /// widening default bounds that exclude it.
   bool equation_error_start = true;
+  /// When every free parameter has a value in the model (a complete guess, e.g. an earlier
+  /// fit), one individual of the first population is exactly that guess: the search never ends
+  /// worse than it (the rest of the population is drawn around it as before; a value outside a
+  /// default bound widens the bound, as the equation-error start does).
+  bool values_start = true;
   /// A smooth parameter that ends within 1 % of a default (not user-given) bound: the bound is
   /// widened tenfold and the search resumed from the answer, at most this many times.
   int max_bound_widenings = 3;
