@@ -1,3 +1,4 @@
+# shellcheck shell=bash disable=SC2154,SC2034
 # Sourced by scripts/screenshot and scripts/replay-real: rviz on a virtual X display (Xvfb) and
 # the grab of its screen. Each function prints "WHO: reason" on stderr and returns 1 on failure.
 #   rviz_capture_deps WHO SETUP       SETUP=1: scripts/setup --screenshot --no-build first (rviz,
@@ -8,7 +9,7 @@
 #   grab_screen WHO OUT WORK          the whole screen into OUT (PNG, written atomically); a blank
 #                                     grab (rviz not drawn: next to no variation) fails
 # Needs `here` (the repository root) set and, for rviz_capture_deps's rviz check, scripts/env.sh
-# sourced.
+# sourced. (SC2154/SC2034: `here` comes from the caller, xvfb_pid and DISPLAY go to it.)
 xvfb_pid=""
 
 rviz_capture_deps() {
