@@ -21,6 +21,7 @@
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/identification/marker_model.h"
 #include "motion_model_estimation/identification/muscle_placement.h"
 #include "motion_model_estimation/identification/prediction_error.h"
 #include "motion_model_estimation/identification/structure_selection.h"
@@ -369,60 +370,6 @@ void accuracyExperiment(const Settings& s) {
   std::fclose(f);
 }
 
-/// A model for a capture that comes without one (what a user would write by hand today; the
-/// structure-selection issue makes it from the data): unit masses, a free gravity, and `bonds`
-/// damped springs of one type each (stiffness, rest length, damping free) between the marker
-/// pairs whose distance varies least over the frames (both seen in 80 % of them).
-Model rigidPairModel(const mme::Trajectory& data, int bonds) {
-  const int n = data.numMarkers(), frames = data.numFrames();
-  struct Pair {
-    double spread;
-    int a, b;
-  };
-  std::vector<Pair> pairs;
-  for (int a = 0; a < n; ++a)
-    for (int b = a + 1; b < n; ++b) {
-      double sum = 0, sq = 0;
-      int seen = 0;
-      for (int t = 0; t < frames; ++t) {
-        if (data.isOccluded(t, a) || data.isOccluded(t, b)) continue;
-        const double l = (data.position(t, b) - data.position(t, a)).norm();
-        sum += l;
-        sq += l * l;
-        ++seen;
-      }
-      if (seen < 0.8 * frames || seen < 2) continue;
-      const double mean = sum / seen, var = std::max(0.0, sq / seen - mean * mean);
-      pairs.push_back({std::sqrt(var) / mean, a, b});
-    }
-  std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) { return x.spread < y.spread; });
-  Model m;
-  m.frame_rate_hz = data.frame_rate_hz;
-  for (int i = 0; i < n; ++i) {
-    mme::Particle p;
-    p.name = data.marker_names[i];
-    p.mass_kg = 1.0;
-    m.particles.push_back(p);
-  }
-  for (int c = 0; c < 3; ++c) {
-    m.gravity_mps2[c].present = m.gravity_mps2[c].free = true;
-  }
-  for (int k = 0; k < bonds && k < static_cast<int>(pairs.size()); ++k) {
-    mme::BondType type;
-    type.name = "b" + std::to_string(k);
-    type.kind = mme::BondKind::kSpring;
-    for (mme::ParamId id : {mme::kStiffness, mme::kRestLength, mme::kDamping}) {
-      type.param(id).present = type.param(id).free = true;
-    }
-    m.bond_types.push_back(type);
-    mme::Bond bond;
-    bond.type = k;
-    bond.particles = {{pairs[k].a, pairs[k].b, -1}};
-    m.bonds.push_back(bond);
-  }
-  return m;
-}
-
 /// The online estimator against the offline identification of the same window (issue 13: within
 /// 2x once converged): frames fed at the data's rate, an update every 1/10 s of frames, then the
 /// window stops and updates run until a refinement finished on it; identifyModel on that window.
@@ -450,7 +397,7 @@ void onlineExperiment(const Settings& s) {
   {
     const std::string path = std::string(MME_TEST_DATA_DIR) + "/real/motion_capture_walk.trc";
     const mme::Trajectory data = mme::readTrajectoryFile(path);
-    cases.push_back({"motion_capture_walk", rigidPairModel(data, 91), data});
+    cases.push_back({"motion_capture_walk", mme::markerModel(data, 91), data});
   }
   for (const Case& c : cases) {
     mme::OnlineEstimatorOptions o;
@@ -602,7 +549,7 @@ void structureExperiment(const Settings& s) {
     const std::string path = std::string(MME_TEST_DATA_DIR) + "/real/" + file;
     mme::Trajectory data = mme::readTrajectoryFile(path);
     data = mme::sliceFrames(data, 0, std::min(data.numFrames(), 300));
-    Model particles = rigidPairModel(data, 0);
+    Model particles = mme::markerModel(data);
     const auto start = std::chrono::steady_clock::now();
     try {
       const mme::StructureResult r = mme::selectStructure(particles, data, so);
@@ -677,7 +624,7 @@ void figure5(const Settings& s) {
     if (s.quick && std::string(file) != "arm26_elbow_flex.trc") continue;
     mme::Trajectory data = mme::readTrajectoryFile(std::string(MME_TEST_DATA_DIR) + "/real/" + file);
     data = mme::sliceFrames(data, 0, std::min(data.numFrames(), 300));
-    const mme::StructureResult r = mme::selectStructure(rigidPairModel(data, 0), data, so);
+    const mme::StructureResult r = mme::selectStructure(mme::markerModel(data), data, so);
     cases.push_back({file, r.model, data});
   }
   for (Case& c : cases) {

@@ -27,6 +27,23 @@ size_t Trajectory::countOccluded() const {
   return count;
 }
 
+bool observedBounds(const Trajectory& trajectory, Eigen::Vector3d* min_m, Eigen::Vector3d* max_m) {
+  bool any = false;
+  Eigen::Vector3d lo, hi;
+  for (size_t k = 0; k < trajectory.positions_m.size() && k < trajectory.occluded.size(); ++k) {
+    if (trajectory.occluded[k]) continue;
+    const Eigen::Vector3d& x = trajectory.positions_m[k];
+    lo = any ? lo.cwiseMin(x).eval() : x;
+    hi = any ? hi.cwiseMax(x).eval() : x;
+    any = true;
+  }
+  if (any) {
+    *min_m = lo;
+    *max_m = hi;
+  }
+  return any;
+}
+
 std::string Trajectory::validate() const {
   const size_t expected = marker_names.size() * times_s.size();
   if (frame_numbers.size() != times_s.size()) return "frame_numbers and times_s differ in length";

@@ -1,6 +1,8 @@
 #include "motion_model_estimation/ros/bag_io.h"
 
+#include <fcntl.h>
 #include <rosbag/bag.h>
+#include <unistd.h>
 #include <rosbag/view.h>
 
 #include <algorithm>
@@ -37,6 +39,15 @@ void writeBag(const std::string& path, const std::string& topic, const std::stri
   } catch (const rosbag::BagException& e) {
     std::remove(tmp.c_str());
     throw InputError(path + ": cannot write bag: " + e.what());
+  }
+  // On disk before the rename, like every other write of the package (writeFileAtomically): a
+  // crash then leaves the old file or the whole new one.
+  const int fd = ::open(tmp.c_str(), O_RDONLY);
+  const bool synced = fd >= 0 && ::fsync(fd) == 0;
+  if (fd >= 0) ::close(fd);
+  if (!synced) {
+    std::remove(tmp.c_str());
+    throw InputError(path + ": cannot write bag (fsync failed)");
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
     std::remove(tmp.c_str());

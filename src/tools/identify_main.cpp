@@ -11,6 +11,7 @@
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/muscle.h"
 #include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/identification/marker_model.h"
 #include "motion_model_estimation/identification/muscle_placement.h"
 #include "motion_model_estimation/identification/structure_selection.h"
 #include "motion_model_estimation/io/model_yaml.h"
@@ -45,8 +46,11 @@ int run(int argc, char** argv) {
     std::cout << kUsage;
     return 0;
   }
-  for (const char* required : {"model", "trajectory", "out"})
+  for (const char* required : {"trajectory", "out"})
     if (!args.has(required)) throw mme::InputError(std::string("--") + required + " is required");
+  if (!args.has("model") && !args.has("select-structure"))
+    throw mme::InputError("--model is required (without it only --select-structure can start, from "
+                          "the markers alone)");
   const std::string method = args.get("method", "es");
   if (method != "es") throw mme::InputError("--method '" + method + "' is unknown (available: es)");
   const std::string model_path = args.get("model");
@@ -88,7 +92,18 @@ int run(int argc, char** argv) {
   const bool compare = args.has("compare-to-model");
   const bool quiet = args.has("quiet");
 
-  mme::Model model = mme::loadModelFile(model_path);
+  if (compare && model_path.empty())
+    throw mme::InputError("--compare-to-model needs --model (the values to compare with)");
+  mme::Model model;
+  if (!model_path.empty()) model = mme::loadModelFile(model_path);
+  const mme::Trajectory data = mme::readToolTrajectory("identify", trajectory_path, args.get("topic"));
+  if (model_path.empty()) {
+    // No model: the markers are the particles (identification/marker_model.h).
+    model = mme::markerModel(data);
+    std::printf("identify: no --model: the %zu markers of %s are the particles (1 kg each, free "
+                "gravity); structure selection chooses every bond\n",
+                model.particles.size(), trajectory_path.c_str());
+  }
   const mme::Model reference = model;
   if (compare) {
     // The file's values are the truth to compare with, not initial guesses.
@@ -98,7 +113,7 @@ int run(int argc, char** argv) {
     }
   }
   const mme::Trajectory trajectory =
-      mme::loadModelTrajectory("identify", trajectory_path, args.get("topic"), args, &model);
+      mme::fitTrajectoryToModel("identify", trajectory_path, data, args, &model);
   if (args.has("select-structure")) {
     // The structure from the markers first: the model file's bonds stay, candidates are added
     // and thinned (structure_selection.h); the chosen model is then identified as usual on

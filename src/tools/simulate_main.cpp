@@ -8,8 +8,7 @@
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/io/model_yaml.h"
 #include "motion_model_estimation/io/trajectory_io.h"
-#include "motion_model_estimation/io/trc.h"
-#include "motion_model_estimation/ros/bag_io.h"
+#include "motion_model_estimation/ros/trajectory_files.h"
 #include "motion_model_estimation/scenes/scenes.h"
 
 namespace {
@@ -66,10 +65,11 @@ int run(int argc, char** argv) {
     throw mme::InputError("the simulation diverged (" + bad +
                           "): lower the frame period or raise substeps");
   mme::addGaussianNoise(&trajectory, noise_std_m, static_cast<uint64_t>(seed));
-  if (ext == ".trc")
-    mme::writeTrc(out, trajectory, args.get("units", "mm"));
-  else
-    mme::writeBag(out, args.get("topic", "markers"), model.frame_id, trajectory);
+  mme::TrajectoryWriteOptions write;
+  write.topic = args.get("topic", "markers");
+  write.frame_id = model.frame_id;
+  write.units = args.get("units", "mm");
+  mme::writeTrajectory(out, trajectory, write);
   if (args.has("truth-out")) mme::writeModelFile(args.get("truth-out"), model);
   if (args.has("model-out")) {
     mme::Model blank = model;

@@ -6,22 +6,24 @@
 #include <vector>
 
 #include "motion_model_estimation/core/error.h"
-#include "motion_model_estimation/io/trajectory_io.h"
-#include "motion_model_estimation/ros/bag_io.h"
+#include "motion_model_estimation/ros/trajectory_files.h"
 
 namespace mme {
 
+Trajectory readToolTrajectory(const char* tool, const std::string& path, const std::string& topic) {
+  std::vector<std::string> warnings;
+  Trajectory data = readTrajectory(path, topic, &warnings);
+  for (const std::string& warning : warnings) std::fprintf(stderr, "%s: warning: %s\n", tool, warning.c_str());
+  return data;
+}
+
 Trajectory loadModelTrajectory(const char* tool, const std::string& path, const std::string& topic,
                                const CliArgs& args, Model* model) {
-  Trajectory data;
-  if (fileExtension(path) == ".bag") {
-    data = readBag(path, topic);
-  } else {
-    std::vector<std::string> warnings;
-    data = readTrajectoryFile(path, &warnings);
-    for (const std::string& warning : warnings) std::fprintf(stderr, "%s: warning: %s\n", tool, warning.c_str());
-  }
-  if (data.numFrames() == 0) throw InputError(path + ": no frames");
+  return fitTrajectoryToModel(tool, path, readToolTrajectory(tool, path, topic), args, model);
+}
+
+Trajectory fitTrajectoryToModel(const char* tool, const std::string& path, const Trajectory& data,
+                                const CliArgs& args, Model* model) {
   std::vector<std::string> names;
   for (const Particle& p : model->particles) names.push_back(p.name);
   std::vector<std::string> missing;

@@ -18,4 +18,10 @@ namespace mme {
 Trajectory loadModelTrajectory(const char* tool, const std::string& path, const std::string& topic,
                                const CliArgs& args, Model* model);
 
+/// The two halves of loadModelTrajectory: the file read (any kind; warnings to stderr), and the
+/// data matched to the model and cut to the frames asked for (`path` names the file in errors).
+Trajectory readToolTrajectory(const char* tool, const std::string& path, const std::string& topic);
+Trajectory fitTrajectoryToModel(const char* tool, const std::string& path, const Trajectory& data,
+                                const CliArgs& args, Model* model);
+
 }  // namespace mme

@@ -12,7 +12,7 @@ tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 "$sim" --scene paper_object --frames 40 --out "$tmp/c.trc" --noise-std 0.001 --seed 8
 body() { tail -n +2 "$1"; }                        # line 1 names the file itself
 cmp <(body "$tmp/a.trc") <(body "$tmp/b.trc")      # same seed: same bytes
-! cmp -s <(body "$tmp/a.trc") <(body "$tmp/c.trc") # other seed: other noise
+if cmp -s <(body "$tmp/a.trc") <(body "$tmp/c.trc"); then echo "another seed gave the same noise"; exit 1; fi
 grep -q "NumFrames" "$tmp/a.trc"
 [ "$(awk 'NR==3{print $4}' "$tmp/a.trc")" = "15" ]   # NumMarkers
 [ "$(awk 'NR==3{print $3}' "$tmp/a.trc")" = "40" ]   # NumFrames

@@ -11,6 +11,7 @@
 #include "motion_model_estimation/core/trajectory.h"
 #include "motion_model_estimation/ros/bag_io.h"
 #include "motion_model_estimation/ros/conversions.h"
+#include "motion_model_estimation/ros/trajectory_files.h"
 
 namespace {
 
@@ -124,6 +125,67 @@ TEST(Conversions, NaNIsOccludedAndMismatchedFramesAreRejected) {
   EXPECT_NE(mme::appendMarkerFrame(msg, &t), "");
   EXPECT_EQ(t.numFrames(), 1);  // rejected frames leave the trajectory as it was
   EXPECT_EQ(t.positions_m.size(), 2u);
+}
+
+}  // namespace
+
+namespace {
+
+// A real capture through writeTrajectory / readTrajectory: bag and TRC keep what was read.
+void expectSameCapture(const mme::Trajectory& in, const mme::Trajectory& out, double tolerance_m,
+                       double time_offset_s) {
+  ASSERT_EQ(out.marker_names, in.marker_names);
+  ASSERT_EQ(out.numFrames(), in.numFrames());
+  EXPECT_DOUBLE_EQ(out.frame_rate_hz, in.frame_rate_hz);
+  EXPECT_EQ(out.countOccluded(), in.countOccluded());
+  for (int f = 0; f < in.numFrames(); ++f) {
+    ASSERT_EQ(out.frame_numbers[f], in.frame_numbers[f]);
+    ASSERT_NEAR(out.times_s[f], in.times_s[f] + time_offset_s, 1e-6) << f;
+    for (int i = 0; i < in.numMarkers(); ++i) {
+      ASSERT_EQ(out.isOccluded(f, i), in.isOccluded(f, i)) << f << " " << in.marker_names[i];
+      ASSERT_LE((out.position(f, i) - in.position(f, i)).norm(), tolerance_m)
+          << f << " " << in.marker_names[i];
+    }
+  }
+}
+
+TEST(TrajectoryFiles, RealCapturesWithGapsRoundTripThroughBagAndTrc) {
+  for (const char* file : {"Sample26_Walking_Hybrid_1_1.c3d", "motion_capture_walk.trc",
+                           "Sample01_Eb015pi.c3d"}) {
+    SCOPED_TRACE(file);
+    const mme::Trajectory in =
+        mme::readTrajectory(std::string(MME_TEST_DATA_DIR) + "/real/" + file, "");
+    ASSERT_GT(in.numFrames(), 100);
+    const std::string bag = tempPath("capture.bag"), trc = tempPath("capture.trc");
+    mme::writeTrajectory(bag, in);
+    const mme::Trajectory from_bag = mme::readTrajectory(bag, "markers");
+    // A bag cannot hold time 0: a capture starting there is stamped from 1 s on.
+    const double offset_s = in.times_s[0] <= 0.0 ? 1.0 : 0.0;
+    expectSameCapture(in, from_bag, 0.0, offset_s);  // bit exact positions
+    mme::TrajectoryWriteOptions o;
+    o.units = "mm";
+    mme::writeTrajectory(trc, from_bag, o);
+    expectSameCapture(in, mme::readTrajectory(trc, ""), 1e-9, offset_s);
+    std::remove(bag.c_str());
+    std::remove(trc.c_str());
+  }
+  // Sample26's gaps are many: the round trip above checked 3902 of them one by one.
+  EXPECT_EQ(mme::readTrajectory(std::string(MME_TEST_DATA_DIR) + "/real/Sample26_Walking_Hybrid_1_1.c3d", "")
+                .countOccluded(), 3902u);
+}
+
+TEST(TrajectoryFiles, UnknownExtensionsAndEmptyTopicAreRefusedByName) {
+  const mme::Trajectory t = makeTrajectory();
+  try {
+    mme::writeTrajectory(tempPath("x.csv"), t);
+    FAIL() << "no throw";
+  } catch (const mme::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("x.csv: cannot write '.csv' files"), std::string::npos) << e.what();
+  }
+  mme::TrajectoryWriteOptions o;
+  o.topic = "";
+  EXPECT_THROW(mme::writeTrajectory(tempPath("x.bag"), t, o), mme::InputError);
+  EXPECT_THROW(mme::readTrajectory(tempPath("x.json"), ""), mme::InputError);
 }
 
 }  // namespace

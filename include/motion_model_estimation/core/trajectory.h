@@ -42,6 +42,10 @@ Trajectory remapMarkers(const Trajectory& in, const std::vector<std::string>& na
 /// Throws std::out_of_range when the range does not lie inside it.
 Trajectory sliceFrames(const Trajectory& in, int first, int count);
 
+/// The box around every observed (not occluded) sample [m]; false (and the box untouched) when
+/// no sample is observed.
+bool observedBounds(const Trajectory& trajectory, Eigen::Vector3d* min_m, Eigen::Vector3d* max_m);
+
 /// Adds independent Gaussian noise of `noise_std_m` [m] to every non-occluded coordinate,
 /// reproducibly from `seed` (own Box-Muller on mt19937_64: same output on every platform).
 void addGaussianNoise(Trajectory* trajectory, double noise_std_m, uint64_t seed);
