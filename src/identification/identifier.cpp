@@ -468,8 +468,16 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
       o.estimate_std = estimate_std;
       return estimateOutputError(m, trajectory, space, from, o);
     };
+    // A fit that ran but ended non-finite (Ceres could not evaluate the residuals, e.g. a rollout
+    // that blew up) is no answer: the search's one-step answer stays.
+    const auto usable = [](const OutputErrorResult& oe) {
+      return oe.ran && std::isfinite(oe.observation_cost_m2);
+    };
+    std::string failed;
     for (const std::vector<double>& from : starts) {
-      const OutputErrorResult oe = fit(model, from, kScoutIterations, false);
+      OutputErrorResult oe = fit(model, from, kScoutIterations, false);
+      if (oe.ran && !usable(oe)) failed = oe.termination;
+      if (!usable(oe)) oe.ran = false;
       if (oe.ran && (!best_oe.ran || oe.observation_cost_m2 < best_oe.observation_cost_m2)) best_oe = oe;
       // A fit as good as the noise allows needs no other start.
       if (best_oe.ran && best_oe.noise_std_m <= 1.2 * best_oe.noise_std_prior_m) break;
@@ -486,7 +494,7 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
         Model finer = model;
         finer.substeps = needed;
         const OutputErrorResult oe = fit(finer, best_oe.genes, kScoutIterations, false);
-        const bool better = oe.ran && oe.observation_cost_m2 < 0.5 * best_oe.observation_cost_m2;
+        const bool better = usable(oe) && oe.observation_cost_m2 < 0.5 * best_oe.observation_cost_m2;
         note("the stiffest mode has omega*h = " + formatValue(omega_h) + " per frame: " +
                  std::to_string(needed) + " substeps per frame fit the frames " +
                  (better ? "better" : "no better") + " than " + std::to_string(model.substeps) +
@@ -503,7 +511,7 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
     if (best_oe.ran) {
       const OutputErrorResult oe = fit(model, best_oe.genes, options.output_error.max_iterations,
                                        options.estimate_std);
-      if (oe.ran && oe.observation_cost_m2 <= best_oe.observation_cost_m2 * (1.0 + 1e-9)) best_oe = oe;
+      if (usable(oe) && oe.observation_cost_m2 <= best_oe.observation_cost_m2 * (1.0 + 1e-9)) best_oe = oe;
       note("output error: " + std::to_string(best_oe.segments) + " segments, " +
                std::to_string(best_oe.iterations) + " iterations of the final fit (" +
                (best_oe.converged ? "converged" : best_oe.termination) + "), marker noise from its residuals " +
@@ -523,6 +531,9 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
       std_devs = best_oe.std_devs;
       unidentifiable = best_oe.unidentifiable;
       omega_h = omegaH(r.values);
+    } else if (!failed.empty()) {
+      note("warning: the output-error fit failed (" + failed + "): the one-step fit is kept",
+           generations_done, evaluations_done);
     }
   }
   r.generations = generations_done;
