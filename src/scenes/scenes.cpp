@@ -437,7 +437,7 @@ Scene makeFluidJet() {
 //    hang from the rails of sections 0 and 3), 4 and 5 the neck and head; the tail (body_08) sits
 //    on three soft springs behind section 0.
 //  - legs: 4 segments of 0.4 m inclined +20, 0, -20, 0 degrees (forwards) from the vertical in
-//    the leg's plane, which splays outwards by 11.5 degrees: joints of 160 degrees, _3 on the
+//    the leg's plane, which splays outwards by 10 degrees: joints of 160 degrees, _3 on the
 //    line from the hip to the hoof. Flexions: "knee" at _1 and _2 (stiff), "fetlock" at _3
 //    (soft: the lift muscle holds it), "hip"/"hip_hind" between the upper segment and the rail
 //    one bay inwards (the fore-aft swing), and "splay" from the other hip of the pair to every
@@ -455,13 +455,14 @@ Scene makeFluidJet() {
 //    each other's negatives: a diagonal trot. A servo, not a passive joint, carries the load:
 //    a passive fetlock stiff enough to stand would need several times the weight to fold.
 // The walker starts mid-stride: the model's initial state is where a 2-s warm-up from the
-// standing pose (tail pushed up) ends. The gait is the attractor of these exact values; it is
-// not structurally robust (README).
+// standing pose (tail pushed up) ends. 80 substeps: the stiff contact and servos (~1000 rad/s)
+// need them for an integration that has converged (with 20 the motion was chaotic at round-off
+// and a different gait); the gait stays the same with 100 or 160.
 constexpr double kWalkerEdgeM = 0.4;                       // trunk bays and cross-sections
 constexpr double kWalkerSegmentM = 0.4;                    // leg segments
 constexpr double kWalkerLegTiltRad = 20.0 * kPi / 180.0;   // segment inclinations
-constexpr double kWalkerSplayRad = 11.5 * kPi / 180.0;     // leg plane from the vertical
-constexpr int kWalkerSubsteps = 20;
+constexpr double kWalkerSplayRad = 10.0 * kPi / 180.0;     // leg plane from the vertical
+constexpr int kWalkerSubsteps = 80;
 constexpr int kWalkerWarmupFrames = 100;
 constexpr double kWalkerLegMassKg[5] = {8.0, 6.0, 5.0, 4.0, 4.0};  // shoulder/hip .. hoof
 constexpr double kWalkerTrunkMassKg = 10.0;
@@ -472,12 +473,12 @@ constexpr double kWalkerTailKickMps = 0.5;  // the tail's initial upward speed
 // Controller weights (README "walker"): the tail's drive [s/m]; the stride units read the tail's
 // top spring (elongation [1/m], speed [s/m], centred on its mean elongation [m]); the servos
 // read their reach or cannon spring; outputs are dimensionless (the gains are in N).
-constexpr double kTailDriveGainN = 3.4, kTailDriveSpeed = -20.0, kTailMeanM = 0.04;
-constexpr double kSwingGainN = 3500.0, kSwingStrideZ = -72.0, kSwingStrideS = 6.9;
-constexpr double kReachServoZ = 10.0, kReachServoS = 0.5, kReachOut = 10.0, kSwingOut = 3.15;
-constexpr double kLiftGainN = 4400.0, kLiftStrideZ = -96.0, kLiftStrideS = 1.5;
+constexpr double kTailDriveGainN = 4.43, kTailDriveSpeed = -20.0, kTailMeanM = 0.04;
+constexpr double kSwingGainN = 2740.0, kSwingStrideZ = -99.6, kSwingStrideS = 0.9;
+constexpr double kReachServoZ = 28.0, kReachServoS = 0.5, kReachOut = 10.0, kSwingOut = 2.73;
+constexpr double kLiftGainN = 2290.0, kLiftStrideZ = -100.0, kLiftStrideS = 0.11;
 constexpr double kCannonServoZ = 40.0, kCannonServoS = 0.5, kCannonOut = 10.0;
-constexpr double kLiftOut = 4.8, kLiftBias = 4.55;
+constexpr double kLiftOut = 4.74, kLiftBias = 4.47;
 
 /// A muscle type that is a pure actuator (stiffness, rest length and damping present and 0),
 /// every parameter fixed.
@@ -602,8 +603,8 @@ Scene makeWalker() {
   const FlexionSpec flexions[kFlexionTypes] = {
       {"knee", angle(leg[0][0], leg[0][1], leg[0][2]), 1.0e5, 100.0},
       {"fetlock", angle(leg[0][2], leg[0][3], leg[0][4]), 200.0, 10.0},
-      {"hip", angle(leg[0][1], leg[0][0], inner_rail[0]), 5300.0, 100.0},
-      {"hip_hind", angle(leg[2][1], leg[2][0], inner_rail[2]), 5300.0, 100.0},
+      {"hip", angle(leg[0][1], leg[0][0], inner_rail[0]), 7460.0, 100.0},
+      {"hip_hind", angle(leg[2][1], leg[2][0], inner_rail[2]), 7460.0, 100.0},
       {"splay", angle(leg[1][0], leg[0][0], leg[0][4]), 3.0e4, 100.0}};
   int flexion_type[kFlexionTypes];
   for (int t = 0; t < kFlexionTypes; ++t) {
