@@ -570,5 +570,26 @@ TEST(Walker, StaysUprightAndBounded) {
   }
 }
 
+// Identification needs the motion to depend smoothly on the parameters: at the walker's 80
+// substeps a 1e-8 relative change of every free parameter moves no marker more than 10 um over
+// the first second (measured 0.17 um; with 20 substeps the motion was chaotic at round-off).
+TEST(Walker, MotionDependsSmoothlyOnItsParameters) {
+  const Scene scene = makeScene("walker");
+  const Model& model = scene.model;
+  const Trajectory truth = simulateTrajectory(model, 51, model.frame_rate_hz);
+  Model nudged = model;
+  const std::vector<ParamRef> refs = freeParameters(model);
+  std::vector<double> values = getValues(model, refs);
+  for (size_t k = 0; k < values.size(); ++k) values[k] *= 1.0 + (k % 2 ? 1e-8 : -1e-8);
+  setValues(nudged, refs, values);
+  const Trajectory moved = simulateTrajectory(nudged, 51, model.frame_rate_hz);
+  double largest_m = 0.0;
+  for (int t = 0; t < truth.numFrames(); ++t)
+    for (int i = 0; i < truth.numMarkers(); ++i)
+      largest_m = std::max(largest_m, (moved.position(t, i) - truth.position(t, i)).norm());
+  EXPECT_GT(largest_m, 0.0);
+  EXPECT_LT(largest_m, 1e-5);
+}
+
 }  // namespace
 }  // namespace mme
