@@ -11,7 +11,9 @@
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/equation_error.h"
 #include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/identification/output_error.h"
 #include "motion_model_estimation/identification/parameter_space.h"
+#include "motion_model_estimation/scenes/scenes.h"
 #include "test_helpers.h"
 
 namespace {
@@ -116,7 +118,7 @@ TEST(MuscleIdentification, TheEvolutionStrategyIdentifiesAMuscleFromNoInitialVal
 // Issue 16's check that muscles do not fit what is not there: data of muscleObject() with the
 // muscle's gain 0 (a plain spring: no controller) and 0.1 mm marker noise. The passive model
 // (every spring part free) is identified; then the muscle's gain and network are freed too,
-// starting from the passive answer. The cost (dominated by the noise) may only fall by what 9
+// starting from the passive answer. The cost (dominated by the noise) may only fall by what 6
 // more parameters can fit of the noise: less than 1 %.
 TEST(MuscleIdentification, FreeMusclesOnDataWithoutAControllerChangeTheCostByLessThanOnePercent) {
   Model truth = mme::test::muscleObject();
@@ -147,6 +149,20 @@ TEST(MuscleIdentification, FreeMusclesOnDataWithoutAControllerChangeTheCostByLes
   RecordProperty("relative_cost_change", std::to_string(change));
   EXPECT_LT(std::abs(change), 0.01) << "passive " << without.global_cost << " m^2, with muscles "
                                     << with.global_cost << " m^2";
+}
+
+// Why the walker is not identified to issue 16's 1 % (README "Identifying the walker"): its
+// contact and servos move the markers between frames (80 substeps), so on its own noiseless
+// frames the paper's one-step cost at the true values is far from round-off (measured 0.049 m^2
+// over 50 frames) and the fourth-difference noise estimate reads 0.8 mm: `identify --cost auto`
+// treats the data as noisy and goes to the output error, whose finite-difference Jacobian is too
+// slow for this scene today. These facts are what a faster output error has to start from.
+TEST(MuscleIdentification, TheWalkersFramesAreNotExactForTheOneStepCost) {
+  const mme::Scene scene = mme::makeScene("walker");
+  const mme::Trajectory data = mme::simulateTrajectory(scene.model, 50, scene.model.frame_rate_hz);
+  mme::ShortTermCost cost(scene.model, data);
+  EXPECT_GT(cost.evaluate(mme::getValues(scene.model, cost.freeParameters()), nullptr), 1e-3);
+  EXPECT_GT(mme::estimateMarkerNoise(data), mme::IdentifyOptions().auto_noise_threshold_m);
 }
 
 }  // namespace
