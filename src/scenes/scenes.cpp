@@ -430,7 +430,7 @@ Scene makeFluidJet() {
 // ------------------------------------------------------------------------------------------
 // walker: the horse of section 4.4 with its 35 markers at 50 Hz (5 per leg: leg_<fl|fr|hl|hr>_0
 // shoulder/hip .. _4 hoof; 15 body/head markers body_00..body_14). It trots on a floor, driven
-// by known muscle controllers (README "walker": the laws, figures and limits).
+// by known muscle controllers (README "The walker": the laws, figures and limits).
 //  - trunk, neck and head: one triangular prism truss along x, 6 cross-sections (x = -0.6 ..
 //    1.4 m, step 0.4 m), equilateral of edge 0.4 m: two bottom "rails" (y = +-0.2 m) and a top
 //    ridge; every rectangular face braced by one diagonal. Sections 0..3 are the trunk (the legs
