@@ -521,7 +521,8 @@ double trunkX(const Model& model, const Trajectory& trajectory, int t) {
 
 // The default 250 frames (5 s): every hoof alternates stance and swings lifted above 2 cm that
 // carry it forward, diagonal hooves are lifted together more often than lateral ones (a trot),
-// and the trunk advances. Measured: 9-11 swings per hoof, 0.97 m.
+// and the trunk advances. Measured: 8-10 swings per hoof, co-lifted frames 39 diagonal against 23
+// fore/hind, 1.34 m.
 TEST(Walker, TrotsHoovesAlternateStanceAndSwingAndTheTrunkAdvances) {
   const Scene scene = makeScene("walker");
   const Model& model = scene.model;
