@@ -22,7 +22,7 @@
 namespace mme {
 namespace {
 
-const double kPi = 3.14159265358979323846;
+constexpr double kPi = 3.14159265358979323846;
 
 Param fixedParam(double value) {
   Param p;
@@ -429,32 +429,80 @@ Scene makeFluidJet() {
 
 // ------------------------------------------------------------------------------------------
 // walker: the horse of section 4.4 with its 35 markers at 50 Hz (5 per leg: leg_<fl|fr|hl|hr>_0
-// shoulder/hip .. _4 hoof; 15 body/head markers body_00..body_14), as a PASSIVE structure until
-// active muscles exist: without ground contacts a stance cannot be modelled, so the hooves are
-// fixed and the walker stands, settles under gravity and sways from its initial velocities.
-// Geometry, chosen so that all springs of a type have the same length (no prestress):
+// shoulder/hip .. _4 hoof; 15 body/head markers body_00..body_14). It trots on a floor, driven
+// by known muscle controllers (README "The walker": the laws, figures and limits).
 //  - trunk, neck and head: one triangular prism truss along x, 6 cross-sections (x = -0.6 ..
-//    1.4 m, step 0.4 m) with equilateral cross-sections of edge 0.4 m: two bottom "rails" (y =
-//    +-0.2 m) and a top ridge; every rectangular face braced by one diagonal (0.566 m).
-//    Sections 0..3 are the trunk (the legs hang from the rails of sections 0 and 3), sections 4
-//    and 5 the neck and the head; a tail marker sits on a regular tetrahedron behind section 0;
-//  - legs: 4 segments of 0.4 m bent by 20 degrees at each of the 3 joints (160 degrees); the left
-//    and right legs of a pair form a braced ladder (rungs 0.4 m at the joints, X braces 0.566 m)
-//    that is stiff sideways; fore-aft bending is held by flexion bonds at the joints (knee) and
-//    at the shoulders/hips (hip: 90 degrees between the upper segment and the rail).
-// The narrow stance (0.4 m) under a high trunk needs stiff legs against sideways rocking
-// (axial stiffness x half-width^2 > weight x height), so the axial modes (up to ~460 rad/s) lie
-// far above the 50 Hz frame rate: 10 substeps, light damping (stable at 10 substeps), and the
-// walker starts from its static equilibrium so that mainly the slow sway (~5 rad/s, a few cm)
-// is excited. Even so, with substeps the frame-difference velocities of the cost are not the
-// model's, and the true values keep a small cost (~6e-5 m^2 over the 250 frames).
-constexpr double kWalkerEdgeM = 0.4;
-constexpr int kWalkerSubsteps = 10;
-constexpr double kWalkerLegMassKg[5] = {25.0, 20.0, 15.0, 12.0, 5.0};  // shoulder/hip .. hoof
-constexpr double kWalkerTrunkMassKg = 30.0;
-constexpr double kWalkerTailMassKg = 5.0;
-constexpr double kWalkerNeckMassKg = 15.0;
-constexpr double kWalkerHeadMassKg = 8.0;
+//    1.4 m, step 0.4 m), equilateral of edge 0.4 m: two bottom "rails" (y = +-0.2 m) and a top
+//    ridge; every rectangular face braced by one diagonal. Sections 0..3 are the trunk (the legs
+//    hang from the rails of sections 0 and 3), 4 and 5 the neck and head; the tail (body_08) sits
+//    on three soft springs behind section 0.
+//  - legs: 4 segments of 0.4 m inclined +20, 0, -20, 0 degrees (forwards) from the vertical in
+//    the leg's plane, which splays outwards by 10 degrees: joints of 160 degrees, _3 on the
+//    line from the hip to the hoof. Flexions: "knee" at _1 and _2 (stiff), "fetlock" at _3
+//    (soft: the lift muscle holds it), "hip"/"hip_hind" between the upper segment and the rail
+//    one bay inwards (the fore-aft swing), and "splay" from the other hip of the pair to every
+//    joint of the leg (holds the leg in its plane; it does not resist the swing).
+//  - ground: a `floor` bond on every hoof (a conditional bond: it acts only below z = 0).
+//  - controllers (all muscles are pure actuators: no stiffness or damping of their own):
+//    * rhythm: a muscle along the tail's top spring reads that spring's elongation speed and
+//      pushes the way the tail moves (negative damping, saturated by tanh): a limit cycle of the
+//      tail bobbing at ~1.6 Hz. Every leg muscle reads the tail's top spring.
+//    * swing (one per leg, _2 to the rail one bay inwards): a servo on the length of a soft
+//      "reach" spring along it (hidden unit 0), whose target the stride moves (hidden unit 1).
+//    * lift (one per leg, _2 to the hoof): a servo on a soft "cannon" spring along it, whose
+//      target folds the fetlock while the leg swings and stretches it a little in stance.
+//    Types come in pairs for the two diagonals (a: fl + hr, b: fr + hl) whose stride weights are
+//    each other's negatives: a diagonal trot. A servo, not a passive joint, carries the load:
+//    a passive fetlock stiff enough to stand would need several times the weight to fold.
+// The walker starts mid-stride: the model's initial state is where a 2-s warm-up from the
+// standing pose (tail pushed up) ends. 80 substeps: the stiff contact and servos (~1000 rad/s)
+// need them for an integration that has converged (with 20 the motion was chaotic at round-off
+// and a different gait); the gait stays the same with 100 or 160.
+constexpr double kWalkerEdgeM = 0.4;                       // trunk bays and cross-sections
+constexpr double kWalkerSegmentM = 0.4;                    // leg segments
+constexpr double kWalkerLegTiltRad = 20.0 * kPi / 180.0;   // segment inclinations
+constexpr double kWalkerSplayRad = 10.0 * kPi / 180.0;     // leg plane from the vertical
+constexpr int kWalkerSubsteps = 80;
+constexpr int kWalkerWarmupFrames = 100;
+constexpr double kWalkerLegMassKg[5] = {8.0, 6.0, 5.0, 4.0, 4.0};  // shoulder/hip .. hoof
+constexpr double kWalkerTrunkMassKg = 10.0;
+constexpr double kWalkerTailMassKg = 4.0;
+constexpr double kWalkerNeckMassKg = 2.0;
+constexpr double kWalkerHeadMassKg = 1.0;
+constexpr double kWalkerTailKickMps = 0.5;  // the tail's initial upward speed
+// Controller weights (README "walker"): the tail's drive [s/m]; the stride units read the tail's
+// top spring (elongation [1/m], speed [s/m], centred on its mean elongation [m]); the servos
+// read their reach or cannon spring; outputs are dimensionless (the gains are in N).
+constexpr double kTailDriveGainN = 4.43, kTailDriveSpeed = -20.0, kTailMeanM = 0.04;
+constexpr double kSwingGainN = 2740.0, kSwingStrideZ = -99.6, kSwingStrideS = 0.9;
+constexpr double kReachServoZ = 28.0, kReachServoS = 0.5, kReachOut = 10.0, kSwingOut = 2.73;
+constexpr double kLiftGainN = 2290.0, kLiftStrideZ = -100.0, kLiftStrideS = 0.11;
+constexpr double kCannonServoZ = 40.0, kCannonServoS = 0.5, kCannonOut = 10.0;
+constexpr double kLiftOut = 4.74, kLiftBias = 4.47;
+
+/// A muscle type that is a pure actuator (stiffness, rest length and damping present and 0),
+/// every parameter fixed.
+BondType walkerMuscleType(const std::string& name, double gain_n, int inputs, int hidden,
+                          const std::vector<double>& network) {
+  BondType type;
+  type.name = name;
+  type.kind = BondKind::kMuscle;
+  type.param(kStiffness) = fixedParam(0.0);
+  type.param(kRestLength) = fixedParam(0.0);
+  type.param(kDamping) = fixedParam(0.0);
+  type.param(kGain) = fixedParam(gain_n);
+  type.network_inputs = inputs;
+  type.network_hidden = hidden;
+  for (double w : network) type.network.push_back(fixedParam(w));
+  return type;
+}
+
+/// Installs a bond and names it; returns its index.
+int addNamedBond(Model* model, int type, int a, int b, const std::string& name) {
+  addBond(model, type, a, b);
+  model->bonds.back().name = name;
+  return static_cast<int>(model->bonds.size()) - 1;
+}
 
 Scene makeWalker() {
   Scene scene;
@@ -462,17 +510,11 @@ Scene makeWalker() {
   model.frame_rate_hz = 50.0;
   model.substeps = kWalkerSubsteps;
   setGravity(&model, Eigen::Vector3d(0.0, 0.0, -9.81));
-  const double e = kWalkerEdgeM;
-  const double bend = 20.0 * kPi / 180.0;
-  const double leg_angles[4] = {0.0, bend, 0.0, -bend};  // segment inclinations from vertical
+  const double e = kWalkerEdgeM, seg = kWalkerSegmentM, splay = kWalkerSplayRad;
+  const double leg_angles[4] = {kWalkerLegTiltRad, 0.0, -kWalkerLegTiltRad, 0.0};
   double rail_z = 0.0;
-  for (double a : leg_angles) rail_z += e * std::cos(a);
+  for (double a : leg_angles) rail_z += seg * std::cos(a) * std::cos(splay);
   const double ridge_z = rail_z + e * std::sqrt(0.75);
-  // Sway (initial velocities, set at the end): growing with height, sideways and forwards.
-  auto sway = [&](const Eigen::Vector3d& x) {
-    const double s = x.z() / ridge_z;
-    return Eigen::Vector3d(0.10 * s, 0.15 * s, 0.0);
-  };
   char name[32];
   // Legs first: 20 markers.
   const char* leg_names[4] = {"fl", "fr", "hl", "hr"};
@@ -480,12 +522,15 @@ Scene makeWalker() {
   const double leg_y[4] = {0.2, -0.2, 0.2, -0.2};
   int leg[4][5];
   for (int l = 0; l < 4; ++l) {
+    const double side = leg_y[l] > 0 ? 1.0 : -1.0;
     Eigen::Vector3d x(leg_x[l], leg_y[l], rail_z);
     for (int k = 0; k < 5; ++k) {
       std::snprintf(name, sizeof(name), "leg_%s_%d", leg_names[l], k);
-      if (k == 4) x.z() = 0.0;  // exact ground contact despite rounding
-      leg[l][k] = addParticle(&model, name, kWalkerLegMassKg[k], x, Eigen::Vector3d::Zero(), k == 4);
-      if (k < 4) x += e * Eigen::Vector3d(std::sin(leg_angles[k]), 0.0, -std::cos(leg_angles[k]));
+      if (k == 4) x.z() = 0.0;  // on the floor despite rounding
+      leg[l][k] = addParticle(&model, name, kWalkerLegMassKg[k], x);
+      if (k == 4) break;
+      const double down = seg * std::cos(leg_angles[k]);
+      x += Eigen::Vector3d(seg * std::sin(leg_angles[k]), side * down * std::sin(splay), -down * std::cos(splay));
     }
   }
   // Prism sections: [s][0] left rail, [s][1] right rail, [s][2] ridge.
@@ -514,18 +559,34 @@ Scene makeWalker() {
   for (int s = 4; s < kSections; ++s)  // 09-11 neck, 12-14 head
     for (int corner = 0; corner < 3; ++corner)
       section[s][corner] = addBody(sectionPoint(s, corner), s == 4 ? kWalkerNeckMassKg : kWalkerHeadMassKg);
-  // Bond types.
+  std::vector<Eigen::Vector3d> x0;
+  for (const Particle& p : model.particles) x0.push_back(p.position_m);
+  auto dist = [&](int a, int b) { return (x0[a] - x0[b]).norm(); };
+  auto angle = [&](int a, int b, int c) {
+    return std::acos((x0[a] - x0[b]).normalized().dot((x0[c] - x0[b]).normalized()));
+  };
+  // The rail one bay inwards of each hip: the hip flexion's third point and the swing muscle's.
+  const int inner_rail[4] = {section[2][0], section[2][1], section[1][0], section[1][1]};
+  // Spring types, free: stiffness, damping, rest length (that of the unloaded geometry).
   struct SpringSpec {
     const char* name;
     double rest_length, stiffness, damping;
   };
-  const double diag = e * std::sqrt(2.0);
-  // Damping stays at ~1/5 of the explicit integration's stability limit at 10 substeps.
-  const SpringSpec springs[6] = {{"leg_spring", e, 4.0e5, 120.0},  {"leg_brace", diag, 2.0e5, 60.0},
-                                 {"body_spring", e, 4.0e5, 120.0}, {"body_brace", diag, 2.0e5, 60.0},
-                                 {"neck_spring", e, 1.5e5, 40.0},  {"neck_brace", diag, 1.0e5, 20.0}};
-  int spring_type[6];
-  for (int t = 0; t < 6; ++t) {
+  const double k_leg = 3.0e5, k_body = 3.0e5;
+  enum { kLeg, kBody, kBodyBrace, kNeck, kNeckBrace, kTail, kCannon, kReachFore, kReachHind, kSpringTypes };
+  const SpringSpec springs[kSpringTypes] = {
+      {"leg_spring", seg, k_leg, 0.0003 * k_leg},
+      {"body_spring", e, k_body, 0.0003 * k_body},
+      {"body_brace", e * std::sqrt(2.0), 0.5 * k_body, 0.00015 * k_body},
+      {"neck_spring", e, 0.4 * k_body, 0.0001 * k_body},
+      {"neck_brace", e * std::sqrt(2.0), 0.25 * k_body, 0.00005 * k_body},
+      {"tail_spring", e, 1200.0, 2.0},
+      // The servos' sensors: soft springs along the lift and swing muscles.
+      {"cannon", dist(leg[0][2], leg[0][4]), 2000.0, 5.0},
+      {"reach_fore", dist(leg[0][2], inner_rail[0]), 2000.0, 5.0},
+      {"reach_hind", dist(leg[2][2], inner_rail[2]), 2000.0, 5.0}};
+  int spring_type[kSpringTypes];
+  for (int t = 0; t < kSpringTypes; ++t) {
     BondType type;
     type.name = springs[t].name;
     type.param(kStiffness) = freeMagnitude(springs[t].stiffness);
@@ -533,13 +594,20 @@ Scene makeWalker() {
     type.param(kRestLength) = freeLength(springs[t].rest_length);
     spring_type[t] = addType(&model, type);
   }
+  // Flexion types, free: stiffness, rest angle; damping fixed.
   struct FlexionSpec {
     const char* name;
     double rest_angle, stiffness, damping;
   };
-  const FlexionSpec flexions[2] = {{"knee", kPi - bend, 4.0e4, 40.0}, {"hip", 0.5 * kPi, 8.0e4, 80.0}};
-  int flexion_type[2];
-  for (int t = 0; t < 2; ++t) {
+  enum { kKnee, kFetlock, kHipFore, kHipHind, kSplay, kFlexionTypes };
+  const FlexionSpec flexions[kFlexionTypes] = {
+      {"knee", angle(leg[0][0], leg[0][1], leg[0][2]), 1.0e5, 100.0},
+      {"fetlock", angle(leg[0][2], leg[0][3], leg[0][4]), 200.0, 10.0},
+      {"hip", angle(leg[0][1], leg[0][0], inner_rail[0]), 7460.0, 100.0},
+      {"hip_hind", angle(leg[2][1], leg[2][0], inner_rail[2]), 7460.0, 100.0},
+      {"splay", angle(leg[1][0], leg[0][0], leg[0][4]), 3.0e4, 100.0}};
+  int flexion_type[kFlexionTypes];
+  for (int t = 0; t < kFlexionTypes; ++t) {
     BondType type;
     type.name = flexions[t].name;
     type.kind = BondKind::kFlexion;
@@ -549,52 +617,92 @@ Scene makeWalker() {
     type.param(kDamping) = fixedParam(flexions[t].damping);
     flexion_type[t] = addType(&model, type);
   }
-  const int leg_spring = spring_type[0], leg_brace = spring_type[1];
-  // Legs: segments, joints, shoulders/hips (towards the middle of the trunk).
+  // Ground contact, free: stiffness, damping, friction; the floor's height (0) fixed.
+  BondType ground;
+  ground.name = "ground";
+  ground.kind = BondKind::kFloor;
+  ground.param(kStiffness) = freeMagnitude(5.0e5);
+  ground.param(kDamping) = freeMagnitude(2000.0);
+  ground.param(kFriction) = freeMagnitude(4000.0);
+  ground.param(kHeight) = fixedParam(0.0);
+  const int ground_type = addType(&model, ground);
+  // Legs: segments, joints, hips, splay (from the other hip of the pair), ground contact.
   for (int l = 0; l < 4; ++l) {
-    for (int k = 0; k < 4; ++k) addBond(&model, leg_spring, leg[l][k], leg[l][k + 1]);
+    const int other_hip = leg[l ^ 1][0];
+    for (int k = 0; k < 4; ++k) addBond(&model, spring_type[kLeg], leg[l][k], leg[l][k + 1]);
     for (int k = 1; k <= 3; ++k)
-      addBond(&model, flexion_type[0], leg[l][k - 1], leg[l][k], leg[l][k + 1]);
-    addBond(&model, flexion_type[1], leg[l][1], leg[l][0],
-            section[leg_x[l] > 0 ? 2 : 1][leg_y[l] > 0 ? 0 : 1]);
+      addBond(&model, flexion_type[k == 3 ? kFetlock : kKnee], leg[l][k - 1], leg[l][k], leg[l][k + 1]);
+    addBond(&model, flexion_type[leg_x[l] > 0 ? kHipFore : kHipHind], leg[l][1], leg[l][0], inner_rail[l]);
+    for (int k = 1; k <= 4; ++k) addBond(&model, flexion_type[kSplay], other_hip, leg[l][0], leg[l][k]);
+    addBond(&model, ground_type, leg[l][4]);
   }
-  // Ladders: (fl, fr) and (hl, hr); rungs at the joints, X braces in every storey.
-  for (int pair = 0; pair < 2; ++pair) {
-    const int* left = leg[2 * pair];
-    const int* right = leg[2 * pair + 1];
-    for (int k = 1; k <= 3; ++k) addBond(&model, leg_spring, left[k], right[k]);
-    for (int k = 0; k < 4; ++k) {
-      addBond(&model, leg_brace, left[k], right[k + 1]);
-      addBond(&model, leg_brace, right[k], left[k + 1]);
-    }
-  }
-  // Prism: cross-section triangles, then per bay 3 longitudinal edges and 3 face diagonals;
-  // sections/bays 0..3 are trunk (body_*), the rest neck/head (neck_*).
+  // The servos' sensor springs: cannons (_2 to the hoof), reaches (_2 to the inner rail).
+  int cannon[4], reach[4];
+  for (int l = 0; l < 4; ++l)
+    cannon[l] = addNamedBond(&model, spring_type[kCannon], leg[l][2], leg[l][4], std::string("cannon_") + leg_names[l]);
+  for (int l = 0; l < 4; ++l)
+    reach[l] = addNamedBond(&model, spring_type[leg_x[l] > 0 ? kReachFore : kReachHind], leg[l][2],
+                            inner_rail[l], std::string("reach_") + leg_names[l]);
+  // Prism: cross-section triangles, then per bay 3 longitudinal edges and 3 face diagonals.
   for (int s = 0; s < kSections; ++s) {
-    const int edge = s < 4 ? spring_type[2] : spring_type[4];
+    const int edge = s < 4 ? spring_type[kBody] : spring_type[kNeck];
     addBond(&model, edge, section[s][0], section[s][1]);
     addBond(&model, edge, section[s][0], section[s][2]);
     addBond(&model, edge, section[s][1], section[s][2]);
   }
   for (int s = 0; s + 1 < kSections; ++s) {
-    const int edge = s < 3 ? spring_type[2] : spring_type[4];
-    const int brace = s < 3 ? spring_type[3] : spring_type[5];
+    const int edge = s < 3 ? spring_type[kBody] : spring_type[kNeck];
+    const int brace = s < 3 ? spring_type[kBodyBrace] : spring_type[kNeckBrace];
     for (int corner = 0; corner < 3; ++corner) addBond(&model, edge, section[s][corner], section[s + 1][corner]);
     addBond(&model, brace, section[s][0], section[s + 1][2]);
     addBond(&model, brace, section[s][1], section[s + 1][2]);
     addBond(&model, brace, section[s][0], section[s + 1][1]);
   }
-  for (int corner = 0; corner < 3; ++corner) addBond(&model, spring_type[2], tail, section[0][corner]);
-  // Start from the static equilibrium under gravity (rest lengths stay those of the unloaded
-  // geometry): a sudden load would ring the stiff axial modes, far above the frame rate, which
-  // the frame-difference velocities of the cost cannot follow. Then the sway velocities.
-  std::vector<Eigen::Vector3d> x;
-  for (const Particle& p : model.particles) x.push_back(p.position_m);
-  polishStaticEquilibrium(model, &x);
-  for (size_t i = 0; i < x.size(); ++i) {
-    Particle& p = model.particles[i];
-    p.position_m = x[i];
-    p.velocity_mps = p.fixed ? Eigen::Vector3d::Zero() : sway(x[i]);
+  // Tail: three soft springs to the rear section, named (the top one is every muscle's input).
+  const char* tail_names[3] = {"tail_left", "tail_right", "tail_top"};
+  int tail_top = -1;
+  for (int corner = 0; corner < 3; ++corner)
+    tail_top = addNamedBond(&model, spring_type[kTail], tail, section[0][corner], tail_names[corner]);
+  // Muscles. The tail's drive: y = w s_top.
+  const int tail_drive = addType(&model, walkerMuscleType("tail_drive", kTailDriveGainN, 1, 0,
+                                                          {0.0, kTailDriveSpeed, 0.0}));
+  addBond(&model, tail_drive, tail, section[0][2]);
+  model.bonds.back().inputs = {tail_top};
+  // Swing and lift: inputs (tail top, sensor); hidden 0 = the servo on the sensor's length,
+  // hidden 1 = the stride (sign +-1 per diagonal); y = servo_out h0 + stride_out h1 + b2.
+  int swing[2], lift[2];
+  for (int d = 0; d < 2; ++d) {
+    const double sign = d == 0 ? 1.0 : -1.0;
+    const std::string diagonal = d == 0 ? "_a" : "_b";
+    swing[d] = addType(&model, walkerMuscleType("swing" + diagonal, kSwingGainN, 2, 2,
+                                                {0.0, kReachServoZ, 0.0, kReachServoS,                   // w1_0_*
+                                                 sign * kSwingStrideZ, 0.0, sign * kSwingStrideS, 0.0,   // w1_1_*
+                                                 0.0, -sign * kSwingStrideZ * kTailMeanM,                // b1
+                                                 kReachOut, kSwingOut, 0.0}));                           // w2, b2
+    lift[d] = addType(&model, walkerMuscleType("lift" + diagonal, kLiftGainN, 2, 2,
+                                               {0.0, kCannonServoZ, 0.0, kCannonServoS,                  // w1_0_*
+                                                sign * kLiftStrideZ, 0.0, sign * kLiftStrideS, 0.0,      // w1_1_*
+                                                0.0, -sign * kLiftStrideZ * kTailMeanM,                  // b1
+                                                kCannonOut, kLiftOut, kLiftBias}));                      // w2, b2
+  }
+  // A swing muscle's tension pulls the knee backwards on a fore leg, forwards on a hind one: the
+  // left legs (fl, hl) take swing_a, the right ones swing_b, so that fl and hr push back while
+  // fr and hl swing forward. The lifts go by diagonal.
+  const int lift_diagonal[4] = {0, 1, 1, 0};
+  for (int l = 0; l < 4; ++l) {
+    addBond(&model, swing[leg_y[l] > 0 ? 0 : 1], leg[l][2], inner_rail[l]);
+    model.bonds.back().inputs = {tail_top, reach[l]};
+    addBond(&model, lift[lift_diagonal[l]], leg[l][2], leg[l][4]);
+    model.bonds.back().inputs = {tail_top, cannon[l]};
+  }
+  // Warm-up from the standing pose with the tail pushed up; the scene starts where it ends.
+  model.particles[tail].velocity_mps = Eigen::Vector3d(0.0, 0.0, kWalkerTailKickMps);
+  Simulator simulator(model);
+  State state = simulator.initialState();
+  for (int f = 0; f < kWalkerWarmupFrames; ++f) simulator.stepFrame(&state, 1.0 / model.frame_rate_hz);
+  for (size_t i = 0; i < model.particles.size(); ++i) {
+    model.particles[i].position_m = state.x_m[i];
+    model.particles[i].velocity_mps = state.v_mps[i];
   }
   scene.default_frames = 250;
   return scene;

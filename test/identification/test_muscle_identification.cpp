@@ -1,7 +1,8 @@
 // Muscles in identification: the local-cost sites of a muscle type are its own ends, the
 // search space keeps network parameters signed (linear coordinates, symmetric default bounds),
 // the equation-error start declines muscle parameters with a reason, and the evolution
-// strategy identifies a small scene with one muscle type.
+// strategy identifies a small scene with one muscle type; on data made without a controller,
+// free muscles add nothing (the cost changes by less than 1 %).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,7 +13,9 @@
 #include "motion_model_estimation/identification/equation_error.h"
 #include "motion_model_estimation/identification/identifier.h"
 #include "motion_model_estimation/identification/muscle_placement.h"
+#include "motion_model_estimation/identification/output_error.h"
 #include "motion_model_estimation/identification/parameter_space.h"
+#include "motion_model_estimation/scenes/scenes.h"
 #include "test_helpers.h"
 
 namespace {
@@ -120,6 +123,56 @@ TEST(MuscleIdentification, TheEvolutionStrategyIdentifiesAMuscleFromNoInitialVal
   }
   EXPECT_GE(recovered, 3);
   EXPECT_EQ(below_passive, 6);
+}
+
+// Issue 16's check that muscles do not fit what is not there: data of muscleObject() with the
+// muscle's gain 0 (a plain spring: no controller) and 0.1 mm marker noise. The passive model
+// (every spring part free) is identified; then the muscle's gain and network are freed too,
+// starting from the passive answer. The cost (dominated by the noise) may only fall by what 6
+// more parameters can fit of the noise: less than 1 %.
+TEST(MuscleIdentification, FreeMusclesOnDataWithoutAControllerChangeTheCostByLessThanOnePercent) {
+  Model truth = mme::test::muscleObject();
+  mme::BondType& tm = truth.bond_types[truth.bondTypeIndex("m")];
+  tm.param(mme::kGain).value = 0.0;
+  mme::Trajectory data = mme::simulateTrajectory(truth, 200, 100.0);
+  mme::addGaussianNoise(&data, 1e-4, 5);
+
+  Model passive = truth;
+  for (const char* name : {"s", "d", "m"})
+    for (mme::ParamId id : {mme::kStiffness, mme::kRestLength, mme::kDamping}) {
+      mme::Param& p = passive.bond_types[passive.bondTypeIndex(name)].param(id);
+      if (p.present) p.free = true;
+    }
+  mme::IdentifyOptions options;
+  options.cost = mme::CostChoice::kShortTerm;
+  options.generations = 300;
+  options.estimate_std = false;
+  const mme::IdentifyResult without = mme::identifyModel(mme::test::withoutValues(passive), data, options);
+
+  Model with_muscles = without.model;  // the passive answer as the start
+  mme::BondType& wm = with_muscles.bond_types[with_muscles.bondTypeIndex("m")];
+  wm.param(mme::kGain) = mme::test::valueParam(1.0, true);
+  for (mme::Param& p : wm.network) p.free = true;
+  const mme::IdentifyResult with = mme::identifyModel(with_muscles, data, options);
+  ASSERT_GT(without.global_cost, 0.0);
+  const double change = (with.global_cost - without.global_cost) / without.global_cost;
+  RecordProperty("relative_cost_change", std::to_string(change));
+  EXPECT_LT(std::abs(change), 0.01) << "passive " << without.global_cost << " m^2, with muscles "
+                                    << with.global_cost << " m^2";
+}
+
+// Why the walker is not identified to issue 16's 1 % (README "Identifying the walker"): its
+// contact and servos move the markers between frames (80 substeps), so on its own noiseless
+// frames the paper's one-step cost at the true values is far from round-off (measured 0.049 m^2
+// over 50 frames) and the fourth-difference noise estimate reads 0.8 mm: `identify --cost auto`
+// treats the data as noisy and goes to the output error, whose finite-difference Jacobian is too
+// slow for this scene today. These facts are what a faster output error has to start from.
+TEST(MuscleIdentification, TheWalkersFramesAreNotExactForTheOneStepCost) {
+  const mme::Scene scene = mme::makeScene("walker");
+  const mme::Trajectory data = mme::simulateTrajectory(scene.model, 50, scene.model.frame_rate_hz);
+  mme::ShortTermCost cost(scene.model, data);
+  EXPECT_GT(cost.evaluate(mme::getValues(scene.model, cost.freeParameters()), nullptr), 1e-3);
+  EXPECT_GT(mme::estimateMarkerNoise(data), mme::IdentifyOptions().auto_noise_threshold_m);
 }
 
 }  // namespace
