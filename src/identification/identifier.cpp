@@ -129,9 +129,6 @@ std::vector<std::pair<size_t, int>> widenableAtBound(const ParameterSpace& space
   return out;
 }
 
-/// Equation-error starts (raw and smoothed differences) as gene vectors; a value outside a
-/// default bound widens it (beyond a user's bound it is clamped), an undetermined one is left
-/// at the initial distribution's centre. Notes what it widened.
 /// Physical values -> one individual's genes, for a seed of the first population: a value outside
 /// a default (not user-given) bound widens that bound to include it (and says so); unusable
 /// values (non-finite, not positive on a log scale, a clamp-length gene) take the initial centre.
@@ -161,6 +158,9 @@ std::vector<double> seedGenes(const std::vector<double>& values, const std::stri
   return genes;
 }
 
+/// Equation-error starts (raw and smoothed differences) as gene vectors; a value outside a
+/// default bound widens it (beyond a user's bound it is clamped), an undetermined one is left
+/// at the initial distribution's centre. Notes what it widened.
 std::vector<std::vector<double>> equationErrorSeeds(const Model& model, const Trajectory& trajectory,
                                                     ParameterSpace* space,
                                                     std::vector<std::string>* notes) {
