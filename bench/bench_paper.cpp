@@ -630,11 +630,12 @@ void figure5(const Settings& s) {
     cases.push_back({file, r.model, data});
   }
   for (Case& c : cases) {
-    const int frames = c.data.numFrames();
-    const int held_frames = std::max(15, static_cast<int>(std::lround(0.2 * frames)));
-    const int fit_frames = frames - held_frames;
-    const mme::Trajectory fit = mme::sliceFrames(c.data, 0, fit_frames);
-    const mme::Trajectory held = mme::sliceFrames(c.data, fit_frames - 2, held_frames + 2);
+    // The split structure selection judges on (its default share: the last 20 %).
+    const mme::HeldOutSplit split =
+        mme::splitHeldOut(c.data, mme::StructureOptions().held_out_share, "fig5 " + c.name);
+    const int fit_frames = split.fit_frames, held_frames = split.held_frames;
+    const mme::Trajectory& fit = split.fit;
+    const mme::Trajectory& held = split.held;
     mme::IdentifyOptions o = mme::identifyOptionsFor(s.preset);
     o.generations = generations;
     o.patience_generations = 0;  // every curve the whole budget long

@@ -947,6 +947,20 @@ void convergeLinearized(Model* model, const Trajectory& fit, const EquationError
   }
 }
 
+HeldOutSplit splitHeldOut(const Trajectory& data, double held_out_share, const std::string& who) {
+  const int frames = data.numFrames();
+  HeldOutSplit split;
+  split.held_frames = std::max(15, static_cast<int>(std::lround(held_out_share * frames)));
+  split.fit_frames = frames - split.held_frames;
+  if (split.fit_frames < 20)
+    throw InputError(who + ": " + std::to_string(frames) + " frames are too few (need at least " +
+                     std::to_string(20 + split.held_frames) + ": 20 to fit, " +
+                     std::to_string(split.held_frames) + " held out)");
+  split.fit = sliceFrames(data, 0, split.fit_frames);
+  split.held = sliceFrames(data, split.fit_frames - 2, split.held_frames + 2);
+  return split;
+}
+
 StructureResult selectStructure(const Model& given, const Trajectory& data,
                                 const StructureOptions& options) {
   // The data's rate when the model states none (a live window, a model of particles alone).
@@ -966,19 +980,13 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
     if (bondKindInfo(type.kind).network)
       throw InputError("structure selection: the model has muscles (type '" + type.name +
                        "'); select the passive structure first, then add the muscles");
-  const int frames = data.numFrames();
-  const int held_frames = std::max(15, static_cast<int>(std::lround(options.held_out_share * frames)));
-  const int fit_frames = frames - held_frames;
-  if (fit_frames < 20)
-    throw InputError("structure selection: " + std::to_string(frames) + " frames are too few (need " +
-                     "at least " + std::to_string(20 + held_frames) + ": 20 to fit, " +
-                     std::to_string(held_frames) + " held out)");
+  const HeldOutSplit split = splitHeldOut(data, options.held_out_share, "structure selection");
+  const int fit_frames = split.fit_frames, held_frames = split.held_frames;
   StructureResult result;
   result.fitted_frames = fit_frames;
   result.held_out_frames = held_frames;
-  const Trajectory fit = sliceFrames(data, 0, fit_frames);
-  // The held-out slice starts two frames early: the first held-out frame is a prediction's start.
-  const Trajectory held = sliceFrames(data, fit_frames - 2, held_frames + 2);
+  const Trajectory& fit = split.fit;
+  const Trajectory& held = split.held;
 
   const std::vector<std::pair<int, int>> pairs = candidatePairs(model, fit, options);
   result.candidate_bonds = static_cast<int>(pairs.size());

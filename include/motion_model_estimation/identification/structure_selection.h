@@ -94,6 +94,16 @@ struct StructureResult {
   std::vector<std::string> notes;
 };
 
+/// A window split for judging on frames never fitted: the first frames fitted, the last
+/// `held_out_share` of them (at least 15) held out; the held-out slice starts two frames early so
+/// that its first held-out frame is a prediction's start. Throws InputError (naming `who`) when
+/// fewer than 20 frames would be left to fit.
+struct HeldOutSplit {
+  Trajectory fit, held;
+  int fit_frames = 0, held_frames = 0;
+};
+HeldOutSplit splitHeldOut(const Trajectory& data, double held_out_share, const std::string& who);
+
 /// Chooses the structure. `model` holds the particles (names, masses, fixed flags, gravity: free
 /// gravity is a candidate like a bond) and possibly bonds that stay. `data` has the model's
 /// particles as markers (by name; others ignored). Throws InputError on unusable input (too few
