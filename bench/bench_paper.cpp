@@ -590,9 +590,10 @@ Model dampingVariant(Model m, bool free_damping) {
 }
 
 /// Fig. 5 of the paper (section 4.4): log cost against generations for the same bonds without
-/// muscles (springs), with dampers, and with muscles (every spring type a muscle reading its two
-/// nearest bonds, started from the dampers' fit: activation 0), on the walker and on the real
-/// recordings (structure chosen from the markers first). Each fit runs on the window's first
+/// muscles (springs), with dampers, and with muscles, on the walker (its own known controllers,
+/// the muscle-free parameters from the priors) and on the real recordings (structure chosen from
+/// the markers first; every spring type a muscle reading its two nearest bonds, started from the
+/// dampers' fit: activation 0). Each fit runs on the window's first
 /// 80 % and is judged on the rest: the 10-frame open-loop prediction error beside the model-free
 /// guesses. One cost for all (the paper's one-step cost), the whole generation budget each.
 void figure5(const Settings& s) {
