@@ -1,9 +1,10 @@
-// Multiple shooting with Ceres. One residual block per segment: its observed samples (weighted by
-// 1 / sigma) and its continuity to the next segment's start (weighted continuity_weight / sigma).
+// Multiple shooting with Ceres. Two residual blocks per segment: its observed samples (weighted by
+// 1 / sigma) and its continuity to the next segment's start (weighted continuity_weight / sigma),
+// both read from the segment's one simulation.
 // Parameter blocks: the smooth genes (theta, shared by every segment, bounded as the search space)
 // and one state per segment (positions and velocity x h of the free particles, metres both). A
 // segment's Jacobian is by forward differences through the simulator (one short simulation per
-// column); the continuity's derivative along the next state is -I exactly. The linear solver is
+// column, shared by its two blocks); the continuity's derivative along the next state is -I exactly. The linear solver is
 // sparse Cholesky of the normal equations (block-tridiagonal states bordered by theta).
 #include "motion_model_estimation/identification/output_error.h"
 
@@ -17,6 +18,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <mutex>
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/observations.h"
@@ -61,82 +63,98 @@ struct Problem {
   int stateSize() const { return 6 * static_cast<int>(free_particles.size()); }
 };
 
-/// One part of a shooting segment (frames [first, last]): its observations (at first..last-1,
-/// and at last for the final segment; parameter blocks theta and the segment's state) or its
-/// continuity with the next segment's state (blocks theta, the state and the next state). The
-/// two are separate residual blocks so that the dense Jacobian blocks stay small: the next
-/// state touches only the continuity rows (each part simulates the segment, which is cheap).
-class SegmentCost final : public ceres::CostFunction {
+/// A shooting segment's simulation (frames [first, last]), shared by its two residual blocks:
+/// both need the same residuals and the same forward-difference Jacobian (one short simulation
+/// per column), which it computes once per (theta, state) and hands to each. The rows are the
+/// observed samples (at first..last-1, and at last for the final segment) and then, when a next
+/// segment exists, the end state x continuity weight (the next state is subtracted by the
+/// continuity block, whose derivative along it is -I exactly). Thread-safe: Ceres may evaluate
+/// both blocks at once.
+class SegmentSimulation {
  public:
-  enum class Part { kObservations, kContinuity };
-
-  SegmentCost(const Problem* p, int first, int last, bool has_next, Part part)
-      : p_(p), first_(first), last_(last), has_next_(has_next), part_(part), sim_(p->model) {
-    observed_ = 0;
+  SegmentSimulation(const Problem* p, int first, int last, bool has_next)
+      : p_(p), first_(first), last_(last), has_next_(has_next), model_(p->model), sim_(p->model) {
     const int end = has_next ? last : last + 1;
     for (int t = first; t < end; ++t)
       for (int i : p->free_particles) observed_ += p->obs.isOccluded(t, i) ? 0 : 1;
-    const bool continuity = part == Part::kContinuity;
-    set_num_residuals(continuity ? p->stateSize() : 3 * observed_);
-    mutable_parameter_block_sizes()->push_back(static_cast<int32_t>(p->smooth.size()));
-    mutable_parameter_block_sizes()->push_back(p->stateSize());
-    if (continuity) mutable_parameter_block_sizes()->push_back(p->stateSize());
-    full_.resize(3 * observed_ + (has_next ? p->stateSize() : 0));
+    rows_ = 3 * observed_ + (has_next ? p->stateSize() : 0);
   }
 
-  int observedSamples() const { return part_ == Part::kObservations ? observed_ : 0; }
+  int observedSamples() const { return observed_; }
+  bool hasNext() const { return has_next_; }
 
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override {
-    const int m = num_residuals();
+  /// Copies rows [row0, row0 + count) of the residuals (and of the Jacobians along theta and
+  /// the state when the pointers are given, row-major) for (theta, state). False when the
+  /// simulation is not finite.
+  bool rows(const double* theta, const double* state, int row0, int count, double* residuals,
+            double* jac_theta, double* jac_state) {
+    std::lock_guard<std::mutex> lock(mutex_);
     const int np = static_cast<int>(p_->smooth.size()), ns = p_->stateSize();
-    const double* theta = parameters[0];
-    const double* state = parameters[1];
-    const double* next = part_ == Part::kContinuity ? parameters[2] : nullptr;
-    if (!part(theta, state, next, residuals)) return false;
-    if (!jacobians) return true;
-    std::vector<double> perturbed(m);
-    if (jacobians[0]) {
-      std::vector<double> th(theta, theta + np);
-      for (int j = 0; j < np; ++j) {
-        const Gene& g = p_->space->gene(p_->smooth[j]);
-        double step = 1e-7 * std::max({std::fabs(th[j]), 1e-3 * (g.upper - g.lower), 1e-8});
-        if (th[j] + step > g.upper) step = -step;
-        th[j] += step;
-        const bool ok = part(th.data(), state, next, perturbed.data());
-        th[j] = theta[j];
-        for (int r = 0; r < m; ++r)
-          jacobians[0][r * np + j] = ok ? (perturbed[r] - residuals[r]) / step : 0.0;
-      }
+    const bool same = key_valid_ && std::equal(theta, theta + np, key_theta_.begin()) &&
+                      std::equal(state, state + ns, key_state_.begin());
+    if (!same) {
+      key_theta_.assign(theta, theta + np);
+      key_state_.assign(state, state + ns);
+      residuals_.resize(rows_);
+      ok_ = simulate(theta, state, residuals_.data());
+      key_valid_ = true;
+      jacobian_valid_ = false;
+      jacobian_takers_ = 0;
     }
-    if (jacobians[1]) {
-      std::vector<double> st(state, state + ns);
-      for (int j = 0; j < ns; ++j) {
-        const double step = 1e-7 * std::max(std::fabs(st[j]), 1e-2);
-        st[j] += step;
-        const bool ok = part(theta, st.data(), next, perturbed.data());
-        st[j] = state[j];
-        for (int r = 0; r < m; ++r)
-          jacobians[1][r * ns + j] = ok ? (perturbed[r] - residuals[r]) / step : 0.0;
-      }
+    const bool want_jacobian = jac_theta || jac_state;
+    if (ok_ && want_jacobian && !jacobian_valid_) {
+      computeJacobian(theta, state);
+      jacobian_valid_ = true;
     }
-    if (part_ == Part::kContinuity && jacobians[2]) {
-      std::fill(jacobians[2], jacobians[2] + static_cast<size_t>(m) * ns, 0.0);
-      for (int j = 0; j < ns; ++j) jacobians[2][j * ns + j] = -p_->w_cont;
+    std::copy(residuals_.begin() + row0, residuals_.begin() + row0 + count, residuals);
+    if (!ok_ || !want_jacobian) return ok_;
+    for (int r = 0; r < count; ++r) {
+      if (jac_theta)
+        std::copy_n(jac_theta_.data() + static_cast<size_t>(row0 + r) * np, np, jac_theta + r * np);
+      if (jac_state)
+        std::copy_n(jac_state_.data() + static_cast<size_t>(row0 + r) * ns, ns, jac_state + r * ns);
+    }
+    // Every block that reads this Jacobian has taken it: its memory goes (it is the largest
+    // thing the solve holds on a long capture).
+    if (++jacobian_takers_ == (has_next_ ? 2 : 1)) {
+      jacobian_valid_ = false;
+      std::vector<double>().swap(jac_theta_);
+      std::vector<double>().swap(jac_state_);
     }
     return true;
   }
 
-  /// This part's residuals (a slice of simulate()'s).
-  bool part(const double* theta, const double* state, const double* next, double* out) const {
-    const bool ok = simulate(theta, state, next, full_.data());
-    if (part_ == Part::kObservations) std::copy(full_.begin(), full_.begin() + 3 * observed_, out);
-    else std::copy(full_.begin() + 3 * observed_, full_.end(), out);
-    return ok;
+ private:
+  /// Forward differences around residuals_ (which hold (theta, state)'s).
+  void computeJacobian(const double* theta, const double* state) {
+    const int np = static_cast<int>(p_->smooth.size()), ns = p_->stateSize();
+    jac_theta_.assign(static_cast<size_t>(rows_) * np, 0.0);
+    jac_state_.assign(static_cast<size_t>(rows_) * ns, 0.0);
+    std::vector<double> perturbed(rows_);
+    std::vector<double> th(theta, theta + np);
+    for (int j = 0; j < np; ++j) {
+      const Gene& g = p_->space->gene(p_->smooth[j]);
+      double step = 1e-7 * std::max({std::fabs(th[j]), 1e-3 * (g.upper - g.lower), 1e-8});
+      if (th[j] + step > g.upper) step = -step;
+      th[j] += step;
+      const bool ok = simulate(th.data(), state, perturbed.data());
+      th[j] = theta[j];
+      if (ok)
+        for (int r = 0; r < rows_; ++r) jac_theta_[static_cast<size_t>(r) * np + j] = (perturbed[r] - residuals_[r]) / step;
+    }
+    std::vector<double> st(state, state + ns);
+    for (int j = 0; j < ns; ++j) {
+      const double step = 1e-7 * std::max(std::fabs(st[j]), 1e-2);
+      st[j] += step;
+      const bool ok = simulate(theta, st.data(), perturbed.data());
+      st[j] = state[j];
+      if (ok)
+        for (int r = 0; r < rows_; ++r) jac_state_[static_cast<size_t>(r) * ns + j] = (perturbed[r] - residuals_[r]) / step;
+    }
   }
 
-  /// Residuals of the segment for theta (smooth genes), its start state and the next one's.
-  bool simulate(const double* theta, const double* state, const double* next, double* out) const {
+  /// The segment's rows for theta (smooth genes) and its start state.
+  bool simulate(const double* theta, const double* state, double* out) {
     // The state columns of a Jacobian keep theta: the simulator's parameters are set only when
     // theta changed since the last call.
     if (!std::equal(theta, theta + p_->smooth.size(), theta_set_.begin(), theta_set_.end())) {
@@ -175,32 +193,73 @@ class SegmentCost final : public ceres::CostFunction {
       if (t < last_ || !has_next_) observe(t);
     }
     if (has_next_) {
-      // Continuity in the state's own order: x x x, v h v h v h per particle (zero next state
-      // when only the observations are asked for: those rows are not used then).
-      static const std::vector<double> kZero(p_->stateSize(), 0.0);
-      if (!next) next = kZero.data();
+      // The end state in the state's own order: x x x, v h v h v h per particle.
       for (size_t f = 0; f < p_->free_particles.size(); ++f) {
         const int i = p_->free_particles[f];
-        for (int c = 0; c < 3; ++c) out[r + 6 * f + c] = p_->w_cont * (s.x_m[i][c] - next[6 * f + c]);
-        for (int c = 0; c < 3; ++c)
-          out[r + 6 * f + 3 + c] = p_->w_cont * (s.v_mps[i][c] * h - next[6 * f + 3 + c]);
+        for (int c = 0; c < 3; ++c) out[r + 6 * f + c] = p_->w_cont * s.x_m[i][c];
+        for (int c = 0; c < 3; ++c) out[r + 6 * f + 3 + c] = p_->w_cont * s.v_mps[i][c] * h;
       }
     }
-    for (size_t k = 0; k < full_.size(); ++k)
+    for (int k = 0; k < rows_; ++k)
       if (!std::isfinite(out[k])) return false;
     return true;
   }
 
- private:
   const Problem* p_;
   int first_, last_;
   bool has_next_;
-  Part part_;
   int observed_ = 0;
-  mutable std::vector<double> full_;  // simulate()'s residuals: observations, then continuity
-  mutable Model model_ = p_->model;
-  mutable Simulator sim_;
-  mutable std::vector<double> theta_set_;  // theta the simulator holds (empty: none yet)
+  int rows_ = 0;
+  Model model_;
+  Simulator sim_;
+  std::vector<double> theta_set_;  // theta the simulator holds (empty: none yet)
+  std::mutex mutex_;
+  bool key_valid_ = false;
+  std::vector<double> key_theta_, key_state_;  // what residuals_ (and the Jacobian) are for
+  std::vector<double> residuals_;
+  bool ok_ = false;
+  bool jacobian_valid_ = false;
+  int jacobian_takers_ = 0;
+  std::vector<double> jac_theta_, jac_state_;  // rows_ x np, rows_ x ns, row-major
+};
+
+/// One residual block of a segment: its observations (parameter blocks theta and the segment's
+/// state) or its continuity with the next segment's state (theta, the state and the next
+/// state). The two are separate blocks so that the dense Jacobian blocks stay small: the next
+/// state touches only the continuity rows; both read the segment's one simulation.
+class SegmentCost final : public ceres::CostFunction {
+ public:
+  enum class Part { kObservations, kContinuity };
+
+  SegmentCost(SegmentSimulation* sim, const Problem* p, Part part) : sim_(sim), p_(p), part_(part) {
+    const bool continuity = part == Part::kContinuity;
+    set_num_residuals(continuity ? p->stateSize() : 3 * sim->observedSamples());
+    mutable_parameter_block_sizes()->push_back(static_cast<int32_t>(p->smooth.size()));
+    mutable_parameter_block_sizes()->push_back(p->stateSize());
+    if (continuity) mutable_parameter_block_sizes()->push_back(p->stateSize());
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const int m = num_residuals(), ns = p_->stateSize();
+    const int row0 = part_ == Part::kObservations ? 0 : 3 * sim_->observedSamples();
+    if (!sim_->rows(parameters[0], parameters[1], row0, m, residuals,
+                    jacobians ? jacobians[0] : nullptr, jacobians ? jacobians[1] : nullptr))
+      return false;
+    if (part_ == Part::kObservations) return true;
+    const double* next = parameters[2];
+    for (int k = 0; k < m; ++k) residuals[k] -= p_->w_cont * next[k];
+    if (jacobians && jacobians[2]) {
+      std::fill(jacobians[2], jacobians[2] + static_cast<size_t>(m) * ns, 0.0);
+      for (int j = 0; j < ns; ++j) jacobians[2][j * ns + j] = -p_->w_cont;
+    }
+    return true;
+  }
+
+ private:
+  SegmentSimulation* sim_;
+  const Problem* p_;
+  Part part_;
 };
 
 /// Stops the solve when the caller's flag is raised.
@@ -287,6 +346,10 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
   std::vector<std::vector<double>> states(S, std::vector<double>(ns));
   for (int s = 0; s < S; ++s) dataState(*p, segments[s].first, states[s].data());
 
+  // The segments' simulations outlive the problem whose blocks read them.
+  std::vector<std::unique_ptr<SegmentSimulation>> sims;
+  for (int s = 0; s < S; ++s)
+    sims.push_back(std::make_unique<SegmentSimulation>(p.get(), segments[s].first, segments[s].second, s + 1 < S));
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
@@ -297,26 +360,24 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
     problem.SetParameterUpperBound(theta.data(), static_cast<int>(j), g.upper);
   }
   for (int s = 0; s < S; ++s) problem.AddParameterBlock(states[s].data(), ns);
-  std::vector<const SegmentCost*> costs;  // the observation parts, one per segment
+  // Every observation block first, then every continuity block: Ceres' threads take blocks in
+  // this order, so two threads simulate two segments rather than one waiting for the other's.
   for (int s = 0; s < S; ++s) {
-    const bool has_next = s + 1 < S;
-    auto* observations = new SegmentCost(p.get(), segments[s].first, segments[s].second, has_next,
-                                         SegmentCost::Part::kObservations);
-    costs.push_back(observations);
-    out.observations += 3 * observations->observedSamples();
-    problem.AddResidualBlock(observations, nullptr, theta.data(), states[s].data());
-    if (has_next)
-      problem.AddResidualBlock(new SegmentCost(p.get(), segments[s].first, segments[s].second, true,
-                                               SegmentCost::Part::kContinuity),
-                               nullptr, theta.data(), states[s].data(), states[s + 1].data());
+    out.observations += 3 * sims[s]->observedSamples();
+    problem.AddResidualBlock(new SegmentCost(sims[s].get(), p.get(), SegmentCost::Part::kObservations),
+                             nullptr, theta.data(), states[s].data());
   }
+  for (int s = 0; s + 1 < S; ++s)
+    problem.AddResidualBlock(new SegmentCost(sims[s].get(), p.get(), SegmentCost::Part::kContinuity),
+                             nullptr, theta.data(), states[s].data(), states[s + 1].data());
   out.segments = S;
   // The observation part of the cost, unweighted [m^2].
   const auto observationCost = [&]() {
     double sum = 0.0;
     for (int s = 0; s < S; ++s) {
-      std::vector<double> r(costs[s]->num_residuals());
-      if (!costs[s]->part(theta.data(), states[s].data(), nullptr, r.data()))
+      std::vector<double> r(3 * sims[s]->observedSamples());
+      if (!sims[s]->rows(theta.data(), states[s].data(), 0, static_cast<int>(r.size()), r.data(),
+                         nullptr, nullptr))
         return std::numeric_limits<double>::infinity();
       for (double v : r) sum += v * v;
     }
@@ -332,6 +393,10 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
   solver.gradient_tolerance = 1e-16;
   solver.parameter_tolerance = 1e-12;
   if (options.max_time_s > 0.0) solver.max_solver_time_in_seconds = options.max_time_s;
+  // The projected line search Ceres runs on a bounded problem interpolates with function values
+  // only: its default (cubic) asks for the Jacobian at every trial point, here a simulation per
+  // column, nearly doubling the cost of an iteration.
+  solver.line_search_interpolation_type = ceres::QUADRATIC;
   solver.logging_type = ceres::SILENT;
   CancelCallback cancel(options.cancel);
   if (options.cancel) solver.callbacks.push_back(&cancel);

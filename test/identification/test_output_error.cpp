@@ -103,6 +103,32 @@ TEST(OutputError, OccludedSamplesDoNotCount) {
   EXPECT_LT(maxRelativeError(a.values, n.true_values), 0.01);
 }
 
+// A segment's two residual blocks read one shared simulation (and its Jacobian), which Ceres'
+// threads may ask for at once: the answer is the same bit for bit with 1 and 2 threads, and the
+// same as a second run's.
+TEST(OutputError, ThreadsShareEachSegmentsSimulationWithoutChangingTheAnswer) {
+  Noisy n;
+  const mme::Trajectory data = n.noisy(1e-4, 11);
+  const mme::ParameterSpace space(n.search, data);
+  std::vector<double> start = space.toSearch(n.true_values);
+  for (size_t k = 0; k < start.size(); ++k) start[k] = space.reflect(k, start[k] + (k % 2 ? 0.05 : -0.05));
+  mme::OutputErrorOptions o;
+  o.max_iterations = 6;
+  o.segment_frames = 5;  // many segments: the threads' blocks interleave
+  o.estimate_std = false;
+  o.threads = 1;
+  const mme::OutputErrorResult one = mme::estimateOutputError(n.search, data, space, start, o);
+  o.threads = 2;
+  const mme::OutputErrorResult two = mme::estimateOutputError(n.search, data, space, start, o);
+  const mme::OutputErrorResult again = mme::estimateOutputError(n.search, data, space, start, o);
+  ASSERT_TRUE(one.ran && two.ran && again.ran);
+  EXPECT_LT(one.observation_cost_m2, 0.5 * one.start_cost_m2);  // it did move
+  EXPECT_EQ(one.genes, two.genes);
+  EXPECT_EQ(two.genes, again.genes);
+  EXPECT_EQ(one.observation_cost_m2, two.observation_cost_m2);
+  EXPECT_EQ(one.iterations, two.iterations);
+}
+
 // A parameter the data cannot see (the only bond of its type joins a fixed particle to another
 // fixed one) is flagged, not given a confident number.
 TEST(OutputError, FlagsWhatTheDataCannotDetermine) {
