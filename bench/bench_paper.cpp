@@ -446,6 +446,15 @@ void onlineExperiment(const Settings& s) {
   std::fclose(f);
 }
 
+/// Structure selection as the benchmarks run it: the default engine, no std.
+mme::StructureOptions structureOptions(const Settings& s) {
+  mme::StructureOptions so;
+  so.identify = mme::identifyOptionsFor(mme::Preset::kDefault);
+  so.identify.es.threads = s.threads;
+  so.identify.estimate_std = false;
+  return so;
+}
+
 /// Structure selection (issue 15): random objects of known structure (15-25 markers, springs
 /// only, springs + dampers, hardening springs; bent chains with flexion; noiseless, 10 seeds
 /// each), a 40-marker object for the time, and the real recordings (held-out frames as the judge).
@@ -454,10 +463,7 @@ void structureExperiment(const Settings& s) {
                          "case,seed,markers,true_bonds,true_types,candidate_bonds,bonds,types,"
                          "f1,components_exact,types_within_10pct,max_error_percent,wall_s");
   const int seeds = s.quick ? 1 : 10;
-  mme::StructureOptions so;
-  so.identify = mme::identifyOptionsFor(mme::Preset::kDefault);
-  so.identify.es.threads = s.threads;
-  so.identify.estimate_std = false;
+  mme::StructureOptions so = structureOptions(s);
   if (std::getenv("MME_STRUCTURE_VERBOSE"))
     so.progress = [](const std::string& line) { std::printf("  %s\n", line.c_str()); };
   const auto run = [&](const std::string& name, int seed, const Model& truth, int frames,
@@ -536,8 +542,12 @@ void structureExperiment(const Settings& s) {
     run("springs_40_markers", 1, mme::makeRandomObject(spec), 240, 0.0);
   }
   std::fclose(f);
+}
 
-  // Real recordings: no truth; the held-out frames judge.
+/// Structure selection on the real recordings (their first 300 frames): no truth; the held-out
+/// frames judge. Part of `--only structure`; alone as `--only structure_real`.
+void structureRealExperiment(const Settings& s) {
+  mme::StructureOptions so = structureOptions(s);
   std::FILE* g = openCsv(s.out_dir + "/structure_real.csv",
                          "file,markers,frames,candidate_bonds,full_candidate_parameters,chosen,"
                          "bonds,types,parameters,model_rms_10_m,constant_velocity_rms_10_m,"
@@ -618,10 +628,7 @@ void figure5(const Settings& s) {
                      mme::simulateTrajectory(walker.model, std::min(walker.default_frames, 100),
                                              walker.model.frame_rate_hz)});
   }
-  mme::StructureOptions so;
-  so.identify = mme::identifyOptionsFor(mme::Preset::kDefault);
-  so.identify.es.threads = s.threads;
-  so.identify.estimate_std = false;
+  mme::StructureOptions so = structureOptions(s);
   for (const char* file : {"motion_capture_walk.trc", "subject01_walk1.trc", "arm26_elbow_flex.trc",
                            "Sample01_Eb015pi.c3d", "Sample26_Walking_Hybrid_1_1.c3d"}) {
     if (s.quick && std::string(file) != "arm26_elbow_flex.trc") continue;
@@ -684,7 +691,7 @@ void figure5(const Settings& s) {
       double rms[4] = {NAN, NAN, NAN, NAN};
       bool bounded = false;
       try {
-        const mme::PredictionReport pr = mme::evaluatePredictions(fitted, held, {10});
+        const mme::PredictionReport pr = mme::evaluatePredictions(fitted, held, {10}, 10.0, split.held_start);
         for (const mme::PredictionError& row : pr.rows) rms[static_cast<int>(row.predictor)] = row.rms_m;
         bounded = pr.rollout_bounded;
       } catch (const mme::InputError& e) {
@@ -771,6 +778,7 @@ int main(int argc, char** argv) {
     if (s.wants("accuracy")) accuracyExperiment(s);
     if (s.wants("online")) onlineExperiment(s);
     if (s.wants("structure")) structureExperiment(s);
+    if (s.wants("structure") || s.wants("structure_real")) structureRealExperiment(s);
     if (s.wants("fig5")) figure5(s);
     if (s.wants("table1")) table1(s);
     if (s.wants("fig1")) figure1(s);

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
+
+#include <Eigen/Dense>
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/observations.h"
@@ -13,6 +16,10 @@ namespace {
 /// A start's velocity comes from the latest frame before it, at most this many back, where the
 /// particle is seen.
 constexpr int kMaxVelocityGap = 3;
+/// Neighbours whose rigid motion carries an unseen particle to the start (the nearest ones seen
+/// with it); at least 3, not on one line.
+constexpr int kFillNeighbours = 4;
+
 }  // namespace
 
 const char* predictorName(Predictor predictor) {
@@ -25,8 +32,48 @@ const char* predictorName(Predictor predictor) {
   return "?";
 }
 
+bool fillFromNeighbours(const Observations& obs, const Model& model, int t, int i,
+                        Eigen::Vector3d* position_m) {
+  const auto x = [&](int f, int j) { return Eigen::Map<const Eigen::Vector3d>(obs.position(f, j)); };
+  if (!obs.isOccluded(t, i)) {
+    *position_m = x(t, i);
+    return true;
+  }
+  for (int s = t - 1; s >= 0; --s) {
+    if (obs.isOccluded(s, i)) continue;
+    std::vector<std::pair<double, int>> near;
+    for (int j = 0; j < obs.particles; ++j)
+      if (j != i && !model.particles[j].fixed && !obs.isOccluded(s, j) && !obs.isOccluded(t, j))
+        near.emplace_back((x(s, j) - x(s, i)).squaredNorm(), j);
+    // The latest frame where i was seen is its best picture; with too few companions there, an
+    // earlier one is tried.
+    if (static_cast<int>(near.size()) < 3) continue;
+    const size_t m = std::min<size_t>(kFillNeighbours, near.size());
+    std::partial_sort(near.begin(), near.begin() + static_cast<long>(m), near.end());
+    Eigen::Vector3d from_c = Eigen::Vector3d::Zero(), to_c = Eigen::Vector3d::Zero();
+    for (size_t k = 0; k < m; ++k) {
+      from_c += x(s, near[k].second);
+      to_c += x(t, near[k].second);
+    }
+    from_c /= static_cast<double>(m);
+    to_c /= static_cast<double>(m);
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (size_t k = 0; k < m; ++k)
+      cov += (x(t, near[k].second) - to_c) * (x(s, near[k].second) - from_c).transpose();
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(cov, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Eigen::Vector3d sv = svd.singularValues();
+    if (!(sv[1] > 1e-6 * std::max(sv[0], 1e-300))) continue;  // on a line: no rotation known
+    Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+    d(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+    const Eigen::Matrix3d r = svd.matrixU() * d * svd.matrixV().transpose();
+    *position_m = r * (x(s, i) - from_c) + to_c;
+    return position_m->allFinite();
+  }
+  return false;
+}
 PredictionReport evaluatePredictions(const Model& model, const Trajectory& trajectory,
-                                     const std::vector<int>& horizons, double rollout_factor) {
+                                     const std::vector<int>& horizons, double rollout_factor,
+                                     int first_start) {
   const Observations obs = prepareObservations(model, trajectory);
   if (horizons.empty()) throw InputError("no horizon to evaluate");
   for (int k : horizons)
@@ -44,42 +91,47 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
   const size_t predictors = 4;
   std::vector<double> sum2(horizons.size() * predictors, 0.0);
   std::vector<long> count(horizons.size() * predictors, 0);
-  int first_start = -1;
+  int rollout_start = -1;  // the first start: the long rollout's
   State s, first_state;
-  std::vector<int> back(n);
-  for (int t = 2; t + 1 < frames; ++t) {
+  const int judged_from = std::max(first_start - 2, 0);  // the judged frames' first
+  for (int t = std::max(first_start, 2); t + 1 < frames; ++t) {
     // A start needs every particle's position at t and its velocity: from the latest of the
     // kMaxVelocityGap frames before t where it is seen (x(t-1) when seen: the paper's start).
-    // A fixed particle moves as the model says, seen or not.
+    // A particle unseen at t, or not seen in those frames, is filled from its neighbours' rigid
+    // motion (fillFromNeighbours: data up to t only); it is not scored from this start. A fixed particle
+    // moves as the model says, seen or not.
     bool usable = true;
-    for (int i = 0; i < n && usable; ++i) {
-      back[i] = 0;
-      if (model.particles[i].fixed) continue;
-      if (obs.isOccluded(t, i)) {
-        usable = false;
-        break;
-      }
-      for (int j = 1; j <= kMaxVelocityGap && t - j >= 0 && back[i] == 0; ++j)
-        if (!obs.isOccluded(t - j, i)) back[i] = j;
-      usable = back[i] > 0;
-    }
-    if (!usable) continue;
-    ++report.starts;
-    // The model's open-loop motion from the start, up to the longest horizon in reach.
-    const int reach = std::min(max_k, frames - 1 - t);
+    int filled = 0;
     s.x_m.assign(n, Eigen::Vector3d::Zero());
     s.v_mps.assign(n, Eigen::Vector3d::Zero());
-    for (int i = 0; i < n; ++i) {
+    for (int i = 0; i < n && usable; ++i) {
       if (model.particles[i].fixed) {
         s.x_m[i] = obs.isOccluded(t, i) ? model.particles[i].position_m : Eigen::Vector3d(x(t, i));
         s.v_mps[i] = model.particles[i].velocity_mps;
-      } else {
-        s.x_m[i] = x(t, i);
-        s.v_mps[i] = (x(t, i) - x(t - back[i], i)) / (back[i] * h);
+        continue;
       }
+      int back = 0;
+      if (!obs.isOccluded(t, i))
+        for (int j = 1; j <= kMaxVelocityGap && t - j >= 0 && back == 0; ++j)
+          if (!obs.isOccluded(t - j, i)) back = j;
+      if (back > 0) {
+        s.x_m[i] = x(t, i);
+        s.v_mps[i] = (x(t, i) - x(t - back, i)) / (back * h);
+        continue;
+      }
+      Eigen::Vector3d now, before;
+      usable = fillFromNeighbours(obs, model, t, i, &now) && fillFromNeighbours(obs, model, t - 1, i, &before);
+      s.x_m[i] = now;
+      s.v_mps[i] = (now - before) / h;
+      ++filled;
     }
-    if (first_start < 0) {
-      first_start = t;
+    if (!usable) continue;
+    ++report.starts;
+    report.filled += filled;
+    // The model's open-loop motion from the start, up to the longest horizon in reach.
+    const int reach = std::min(max_k, frames - 1 - t);
+    if (rollout_start < 0) {
+      rollout_start = t;
       first_state = s;
     }
     std::vector<std::vector<Eigen::Vector3d>> path(reach + 1);
@@ -110,8 +162,8 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
     }
   }
   if (report.starts == 0)
-    throw InputError("no frame with every particle seen and seen again within " +
-                     std::to_string(kMaxVelocityGap) + " frames before it: nothing to predict from");
+    throw InputError("no frame where every particle is seen or can be placed by the rigid motion "
+                     "of 3 neighbours seen with it earlier: nothing to predict from");
   for (size_t hi = 0; hi < horizons.size(); ++hi)
     for (size_t p = 0; p < predictors; ++p) {
       PredictionError row;
@@ -125,7 +177,7 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
 
   // A long rollout from the first start stays near the data.
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
-  for (int t = 0; t < frames; ++t)
+  for (int t = judged_from; t < frames; ++t)
     for (int i = 0; i < n; ++i)
       if (!obs.isOccluded(t, i)) {
         lo = lo.cwiseMin(x(t, i));
@@ -133,7 +185,7 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
       }
   const Eigen::Vector3d centre = 0.5 * (lo + hi);
   const double limit_m = 10.0 * std::max((hi - lo).norm(), 1e-3);
-  report.rollout_frames = static_cast<int>(rollout_factor * frames);
+  report.rollout_frames = static_cast<int>(rollout_factor * (frames - judged_from));
   s = first_state;
   report.rollout_bounded = true;
   for (int k = 0; k < report.rollout_frames && report.rollout_bounded; ++k) {

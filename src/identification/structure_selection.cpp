@@ -691,9 +691,10 @@ std::string structureSignature(const Model& model, int first_candidate_type) {
   return out + (gravity ? "gravity" : "");
 }
 
-void heldOutErrors(const Model& model, const Trajectory& held, StructureCandidate* c) {
+void heldOutErrors(const Model& model, const Trajectory& held, int held_start,
+                   StructureCandidate* c) {
   try {
-    const PredictionReport r = evaluatePredictions(model, held, {1, 5, 10});
+    const PredictionReport r = evaluatePredictions(model, held, {1, 5, 10}, 10.0, held_start);
     for (const PredictionError& row : r.rows)
       if (row.predictor == Predictor::kModel)
         for (int k = 0; k < 3; ++k)
@@ -957,7 +958,8 @@ HeldOutSplit splitHeldOut(const Trajectory& data, double held_out_share, const s
                      std::to_string(20 + split.held_frames) + ": 20 to fit, " +
                      std::to_string(split.held_frames) + " held out)");
   split.fit = sliceFrames(data, 0, split.fit_frames);
-  split.held = sliceFrames(data, split.fit_frames - 2, split.held_frames + 2);
+  split.held = data;
+  split.held_start = split.fit_frames;
   return split;
 }
 
@@ -996,11 +998,11 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       std::to_string(model.particles.size()) + " particles; " + std::to_string(fit_frames) +
       " frames fitted, " + std::to_string(held_frames) + " held out");
 
-  // Model-free guesses on the held-out frames (NaN when no start there has every particle seen).
+  // Model-free guesses on the held-out frames (NaN when no start there has every particle placed).
   for (auto& row : result.guess_rms_m)
     for (double& e : row) e = kNan;
   try {
-    const PredictionReport r = evaluatePredictions(model, held, {1, 5, 10}, 0.0);
+    const PredictionReport r = evaluatePredictions(model, held, {1, 5, 10}, 0.0, split.held_start);
     for (const PredictionError& row : r.rows)
       for (int k = 0; k < 3; ++k)
         if (row.horizon == kHorizons[k] && row.predictor != Predictor::kModel)
@@ -1068,7 +1070,7 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       cand->refit_cost_m2 = r.global_cost;
     }
     cand->parameters = static_cast<int>(freeParameters(cand->model).size());
-    heldOutErrors(cand->model, held, cand);
+    heldOutErrors(cand->model, held, split.held_start, cand);
     char line[256];
     std::snprintf(line, sizeof(line),
                   "structure: %s: %d bonds, %d types, %d parameters; held-out RMS 1/5/10 frames "

@@ -53,8 +53,10 @@ int run(int argc, char** argv) {
       mme::loadModelTrajectory("evaluate", args.get("trajectory"), args.get("topic"), args, &model);
   const mme::PredictionReport report = mme::evaluatePredictions(model, trajectory, horizons);
 
-  std::printf("evaluate: %d frames x %d markers at %g Hz, %d prediction starts\n",
-              trajectory.numFrames(), trajectory.numMarkers(), model.frame_rate_hz, report.starts);
+  std::printf("evaluate: %d frames x %d markers at %g Hz, %d prediction starts (%ld particle "
+              "starts filled from their neighbours)\n",
+              trajectory.numFrames(), trajectory.numMarkers(), model.frame_rate_hz, report.starts,
+              report.filled);
   std::printf("%-8s %-22s %14s %10s\n", "horizon", "predictor", "rms_m", "samples");
   std::ostringstream csv;
   csv << "horizon,predictor,rms_m\n";

@@ -1,8 +1,11 @@
 // The prediction judge: the true model predicts its own motion exactly at every horizon and the
 // model-free guesses do not; each guess is exact on the motion it assumes; occluded targets do
 // not count and a start tolerates short gaps; a model that blows up is caught by the rollout;
-// bad horizons are refused.
+// bad horizons are refused; a marker unseen at a start is placed by its neighbours' rigid motion,
+// from earlier frames only.
 #include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
@@ -67,6 +70,117 @@ TEST(PredictionError, EachGuessIsExactOnTheMotionItAssumes) {
   EXPECT_GT(gaps.starts, 10);
   EXPECT_GT(gaps.rows[0].samples, 0);
   EXPECT_LT(predictionRms(gaps, 3, Predictor::kModel), 1e-12);
+}
+
+/// Five markers on a rigid body turning at 2 rad/s about a tilted axis while it drifts, 100 Hz;
+/// body points b (p0 off the others' plane), or with p1..p3 on one line when `line`.
+mme::Trajectory rigidMotion(int frames, bool line = false) {
+  const std::vector<Eigen::Vector3d> b =
+      line ? std::vector<Eigen::Vector3d>{{0.1, 0.2, 0.3}, {0, 0, 0}, {0.1, 0, 0}, {0.2, 0, 0}, {0.3, 0, 0}}
+           : std::vector<Eigen::Vector3d>{{0.1, 0.2, 0.3}, {0, 0, 0}, {0.2, 0, 0}, {0, 0.15, 0}, {0.05, 0.05, -0.1}};
+  mme::Trajectory d;
+  for (size_t i = 0; i < b.size(); ++i) d.marker_names.push_back("p" + std::to_string(i));
+  d.frame_rate_hz = 100.0;
+  d.resize(frames);
+  const Eigen::Vector3d axis = Eigen::Vector3d(0.3, 0.5, 0.8).normalized();
+  for (int t = 0; t < frames; ++t) {
+    const double time = t / 100.0;
+    const Eigen::Matrix3d r = Eigen::AngleAxisd(2.0 * time, axis).toRotationMatrix();
+    const Eigen::Vector3d c(0.1 * time, -0.2 * time + 0.3 * time * time, 1.0);
+    for (size_t i = 0; i < b.size(); ++i) {
+      d.position(t, static_cast<int>(i)) = r * b[i] + c;
+      d.occluded[t * b.size() + i] = 0;
+    }
+  }
+  return d;
+}
+
+mme::Model freeParticles(int n) {
+  mme::Model m;
+  m.frame_rate_hz = 100.0;
+  for (int c = 0; c < 3; ++c) m.gravity_mps2[c] = mme::test::valueParam(0.0);
+  for (int i = 0; i < n; ++i) mme::test::addParticle(&m, Eigen::Vector3d::Zero());
+  return m;
+}
+
+// A marker hidden for 20 frames is placed exactly where the rigid body carries it, from earlier
+// frames only; fewer than 3 neighbours seen, or neighbours on one line, place nothing.
+TEST(PredictionError, AnUnseenMarkerIsPlacedByItsNeighboursRigidMotion) {
+  const mme::Model model = freeParticles(5);
+  const mme::Trajectory truth = rigidMotion(60);
+  mme::Trajectory data = truth;
+  for (int t = 20; t < 40; ++t) {
+    data.occluded[t * 5] = 1;
+    data.position(t, 0) = Eigen::Vector3d(7, 7, 7);
+  }
+  const mme::Observations obs = mme::prepareObservations(model, data);
+  for (int t = 20; t < 40; ++t) {
+    Eigen::Vector3d p;
+    ASSERT_TRUE(mme::fillFromNeighbours(obs, model, t, 0, &p)) << t;
+    EXPECT_LT((p - truth.position(t, 0)).norm(), 1e-12) << t;
+  }
+  // Only frames up to t: garbage after frame 25 changes nothing there.
+  mme::Trajectory later = data;
+  for (int t = 26; t < 60; ++t)
+    for (int i = 0; i < 5; ++i) later.position(t, i) = Eigen::Vector3d(t, -i, 3);
+  Eigen::Vector3d a, b;
+  ASSERT_TRUE(mme::fillFromNeighbours(obs, model, 25, 0, &a));
+  ASSERT_TRUE(mme::fillFromNeighbours(mme::prepareObservations(model, later), model, 25, 0, &b));
+  EXPECT_EQ(a, b);
+  // Two neighbours seen at frame 30: nothing to carry it.
+  mme::Trajectory sparse = data;
+  for (int i : {3, 4}) sparse.occluded[30 * 5 + i] = 1;
+  Eigen::Vector3d none;
+  EXPECT_FALSE(mme::fillFromNeighbours(mme::prepareObservations(model, sparse), model, 30, 0, &none));
+  // Neighbours on one line: the turn about that line is unknown.
+  mme::Trajectory line = rigidMotion(60, true);
+  for (int t = 20; t < 40; ++t) line.occluded[t * 5] = 1;
+  for (int t = 10; t < 40; ++t) line.occluded[t * 5 + 4] = 1;
+  EXPECT_FALSE(mme::fillFromNeighbours(mme::prepareObservations(model, line), model, 30, 0, &none));
+}
+
+// The judge starts where a marker is hidden (its start state filled; it is not scored from
+// there): as many starts as without the gap. The fill is what the model simulates from: a stiff
+// spring from the hidden marker at its exact (rigid) length pulls on nothing, so the bonded model
+// predicts exactly as the free particles do; a misplaced start would pull.
+TEST(PredictionError, StartsWhereAMarkerIsHiddenFillItFromItsNeighbours) {
+  const mme::Model model = freeParticles(5);
+  const mme::Trajectory motion = rigidMotion(60);
+  const mme::PredictionReport all = mme::evaluatePredictions(model, motion, {1, 5});
+  EXPECT_EQ(all.filled, 0);
+  mme::Trajectory data = motion;
+  for (int t = 20; t < 40; ++t) data.occluded[t * 5] = 1;
+  const mme::PredictionReport gap = mme::evaluatePredictions(model, data, {1, 5});
+  EXPECT_EQ(gap.starts, all.starts);
+  EXPECT_EQ(gap.filled, 21);  // unseen at 20..39, and at 40 unseen in the 3 frames before
+
+  mme::Model bonded = model;
+  const double length = (motion.position(0, 0) - motion.position(0, 1)).norm();
+  const int type = mme::test::addType(&bonded, "s", mme::BondKind::kSpring,
+                                      {{mme::kStiffness, 1000.0}, {mme::kRestLength, length}}, false);
+  mme::test::addBond(&bonded, type, 0, 1);
+  // One frame ahead: the spring's force at the start alone moves particle 1 (further ahead the
+  // free particles' straight lines stretch it whatever the start).
+  const mme::PredictionReport pulled = mme::evaluatePredictions(bonded, data, {1});
+  EXPECT_EQ(pulled.starts, gap.starts);
+  const double free_rms = predictionRms(gap, 1, Predictor::kModel);
+  EXPECT_GT(free_rms, 1e-6);  // the turn is not constant velocity
+  EXPECT_NEAR(predictionRms(pulled, 1, Predictor::kModel), free_rms, 1e-6 * free_rms);
+}
+
+// Held-out frames judged after the fitted ones: a marker hidden through the whole held-out part
+// is placed from the frames before first_start, which start no prediction themselves; on the
+// held-out frames alone (marker 0 never seen) nothing could start.
+TEST(PredictionError, FramesBeforeTheFirstStartAreHistoryOnly) {
+  const mme::Model model = freeParticles(5);
+  mme::Trajectory data = rigidMotion(60);
+  for (int t = 30; t < 60; ++t) data.occluded[t * 5] = 1;
+  const mme::PredictionReport r = mme::evaluatePredictions(model, data, {1}, 10.0, 30);
+  EXPECT_EQ(r.starts, 29);  // frames 30..58
+  EXPECT_EQ(r.filled, 29);
+  EXPECT_EQ(r.rollout_frames, 320);  // 10x the judged frames 28..59
+  EXPECT_TRUE(r.rollout_bounded);
+  EXPECT_THROW(mme::evaluatePredictions(model, mme::sliceFrames(data, 30, 30), {1}), mme::InputError);
 }
 
 TEST(PredictionError, ARolloutThatBlowsUpIsCaughtAndBadInputIsRefused) {

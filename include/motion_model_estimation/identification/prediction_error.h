@@ -7,7 +7,10 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "motion_model_estimation/core/model.h"
+#include "motion_model_estimation/core/observations.h"
 #include "motion_model_estimation/core/trajectory.h"
 
 namespace mme {
@@ -26,21 +29,36 @@ struct PredictionError {
 struct PredictionReport {
   std::vector<PredictionError> rows;  ///< per horizon, the four predictors in enum order
   int starts = 0;                     ///< start frames used
+  /// Particle start states filled from neighbours (the particle unseen at the start, or not
+  /// seen in the 3 frames before it), summed over the starts.
+  long filled = 0;
   /// A rollout of the model from the first start, `rollout_frames` long, stays finite and within
   /// 10x the data's extent around its centre.
   bool rollout_bounded = false;
   int rollout_frames = 0;
 };
 
-/// A prediction starts at every frame t where every free particle is seen, and seen again at most
-/// 3 frames before: the model from x(t) with v = (x(t) - x(t-j)) / (j h) for the latest such
-/// frame t-j (j = 1, the paper's start, wherever the particle is seen at t-1). A particle is
-/// scored at x(t + K) when it is seen there and at t-2, t-1 and t (so that every guess is
-/// defined), with the same samples for every predictor. `model` carries every free value;
-/// `trajectory` has its particles as markers. Throws InputError on unusable input (no frame
-/// rate, horizons < 1, no start).
+/// Where free particle i is at frame t, from the frames up to t only: seen there, its observation;
+/// else the rigid motion (least squares, Kabsch) of its nearest free neighbours (up to 4) from the
+/// latest frame s < t where it was seen to t, applied to x_i(s): the "rigid body fill" of
+/// motion-capture software (markers on one segment move together). False when no earlier frame
+/// has at least 3 neighbours seen both then and at t, off one line.
+bool fillFromNeighbours(const Observations& obs, const Model& model, int t, int i,
+                        Eigen::Vector3d* position_m);
+
+/// A prediction starts at every frame t >= max(first_start, 2) where every free particle has a
+/// start state: seen at t, x(t) with v = (x(t) - x(t-j)) / (j h) for the latest frame t-j at most
+/// 3 back where it is seen (j = 1, the paper's start, wherever the particle is seen at t-1);
+/// otherwise filled by fillFromNeighbours, the velocity from its positions at t-1 and t. Frames
+/// before first_start are history only (held-out frames judged after the fitted ones: the fitted
+/// frames place a marker hidden throughout the held-out part). A particle is scored at x(t + K)
+/// when it is seen there and at t-2, t-1 and t (so that every guess is defined, and never from a
+/// filled start), with the same samples for every predictor. The rollout runs rollout_factor x
+/// the judged frames (from first_start - 2) from the first start, bounded by their extent.
+/// `model` carries every free value; `trajectory` has its particles as markers. Throws
+/// InputError on unusable input (no frame rate, horizons < 1, no start).
 PredictionReport evaluatePredictions(const Model& model, const Trajectory& trajectory,
                                      const std::vector<int>& horizons,
-                                     double rollout_factor = 10.0);
+                                     double rollout_factor = 10.0, int first_start = 2);
 
 }  // namespace mme

@@ -95,12 +95,15 @@ struct StructureResult {
 };
 
 /// A window split for judging on frames never fitted: the first frames fitted, the last
-/// `held_out_share` of them (at least 15) held out; the held-out slice starts two frames early so
-/// that its first held-out frame is a prediction's start. Throws InputError (naming `who`) when
-/// fewer than 20 frames would be left to fit.
+/// `held_out_share` of them (at least 15) held out. `held` is the whole window and `held_start`
+/// the first held-out frame: evaluatePredictions(model, held, horizons, factor, held_start) judges
+/// the held-out frames with the fitted ones as history (a marker hidden throughout the held-out
+/// part is placed from them). Throws InputError (naming `who`) when fewer than 20 frames would be
+/// left to fit.
 struct HeldOutSplit {
   Trajectory fit, held;
   int fit_frames = 0, held_frames = 0;
+  int held_start = 0;  ///< first held-out frame of `held` (= fit_frames)
 };
 HeldOutSplit splitHeldOut(const Trajectory& data, double held_out_share, const std::string& who);
 
