@@ -1,5 +1,6 @@
 // evaluate: how well a model predicts a trajectory K frames ahead, open loop, next to three
 // guesses that need no model (the held-out judge of identification and structure choices).
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <sstream>
@@ -16,7 +17,10 @@ namespace {
 
 const char* kUsage =
     "usage: evaluate --model M.yaml --trajectory FILE(.trc|.c3d|.bag) [--topic T]\n"
-    "                [--first-frame F] [--frames N] [--horizons 1,5,10] [--csv OUT.csv]\n";
+    "                [--first-frame F] [--frames N] [--history H] [--horizons 1,5,10]\n"
+    "                [--csv OUT.csv]\n"
+    "--history H: the H frames before --first-frame are read as history: no prediction starts\n"
+    "there, but they place a marker hidden at a start (e.g. the frames a model was fitted on).\n";
 
 std::vector<int> parseHorizons(const std::string& text) {
   std::vector<int> out;
@@ -34,7 +38,7 @@ std::vector<int> parseHorizons(const std::string& text) {
 }
 
 int run(int argc, char** argv) {
-  mme::CliArgs args(argc, argv, {"model", "trajectory", "topic", "first-frame", "frames", "horizons", "csv"},
+  mme::CliArgs args(argc, argv, {"model", "trajectory", "topic", "first-frame", "frames", "history", "horizons", "csv"},
                     {"help"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -49,14 +53,23 @@ int run(int argc, char** argv) {
     if (!mme::paramOf(model, ref).has_value)
       throw mme::InputError(model_path + ": free parameter '" + ref.name +
                             "' has no value (evaluate needs an identified model, e.g. identify's --out)");
-  const mme::Trajectory trajectory =
-      mme::loadModelTrajectory("evaluate", args.get("trajectory"), args.get("topic"), args, &model);
-  const mme::PredictionReport report = mme::evaluatePredictions(model, trajectory, horizons);
+  const int history = static_cast<int>(args.getInt("history", 0, 0, 100000000));
+  int history_kept = 0;
+  const mme::Trajectory trajectory = mme::loadModelTrajectory(
+      "evaluate", args.get("trajectory"), args.get("topic"), args, &model, history, &history_kept);
+  mme::PredictionReport report;
+  try {
+    report = mme::evaluatePredictions(model, trajectory, horizons, 10.0, std::max(history_kept, 2));
+  } catch (const mme::InputError& e) {
+    if (history_kept > 0 || args.getInt("first-frame", 0, 0, 100000000) == 0) throw;
+    throw mme::InputError(std::string(e.what()) +
+                          " (--history H reads the H frames before --first-frame to place them)");
+  }
 
-  std::printf("evaluate: %d frames x %d markers at %g Hz, %d prediction starts (%ld particle "
-              "starts filled from their neighbours)\n",
-              trajectory.numFrames(), trajectory.numMarkers(), model.frame_rate_hz, report.starts,
-              report.filled);
+  std::printf("evaluate: %d frames x %d markers at %g Hz (%d of them history), %d prediction "
+              "starts (%ld particle starts filled from their neighbours)\n",
+              trajectory.numFrames(), trajectory.numMarkers(), model.frame_rate_hz, history_kept,
+              report.starts, report.filled);
   std::printf("%-8s %-22s %14s %10s\n", "horizon", "predictor", "rms_m", "samples");
   std::ostringstream csv;
   csv << "horizon,predictor,rms_m\n";

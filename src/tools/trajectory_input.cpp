@@ -18,12 +18,13 @@ Trajectory readToolTrajectory(const char* tool, const std::string& path, const s
 }
 
 Trajectory loadModelTrajectory(const char* tool, const std::string& path, const std::string& topic,
-                               const CliArgs& args, Model* model) {
-  return fitTrajectoryToModel(tool, path, readToolTrajectory(tool, path, topic), args, model);
+                               const CliArgs& args, Model* model, int history, int* history_kept) {
+  return fitTrajectoryToModel(tool, path, readToolTrajectory(tool, path, topic), args, model, history,
+                              history_kept);
 }
 
 Trajectory fitTrajectoryToModel(const char* tool, const std::string& path, const Trajectory& data,
-                                const CliArgs& args, Model* model) {
+                                const CliArgs& args, Model* model, int history, int* history_kept) {
   std::vector<std::string> names;
   for (const Particle& p : model->particles) names.push_back(p.name);
   std::vector<std::string> missing;
@@ -36,7 +37,9 @@ Trajectory fitTrajectoryToModel(const char* tool, const std::string& path, const
   long count = args.getInt("frames", total - first, 1, total - first);
   if (args.has("window-frames"))
     count = std::min<long>(count, args.getInt("window-frames", count, 1, 100000000));
-  trajectory = sliceFrames(trajectory, first, static_cast<int>(count));
+  const int before = std::min(std::max(history, 0), first);
+  if (history_kept) *history_kept = before;
+  trajectory = sliceFrames(trajectory, first - before, static_cast<int>(count) + before);
   if (model->frame_rate_hz <= 0.0) model->frame_rate_hz = trajectory.frame_rate_hz;
   if (!(model->frame_rate_hz > 0.0)) throw InputError(path + ": no frame rate in the data or the model");
   if (trajectory.frame_rate_hz > 0 &&

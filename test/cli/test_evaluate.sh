@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # evaluate: the identified paper_object predicts held-out frames (not the ones it was identified
 # on) better than the three model-free guesses at 1, 5 and 10 frames; the CSV has the columns
-# horizon,predictor,rms_m and one row per horizon and predictor; bad options give exit 2.
+# horizon,predictor,rms_m and one row per horizon and predictor; a marker hidden through the
+# judged frames is placed from --history frames; bad options give exit 2.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/../.." && pwd)
 source "$here/scripts/env.sh"
@@ -26,6 +27,15 @@ for h in 1 5 10; do
   done
 done
 
+# A marker hidden from frame 100 on: nothing to judge from on frames 100.. alone; with 20 frames
+# of history before them, it is placed by its neighbours' rigid motion at every start.
+awk -F'\t' 'BEGIN { OFS = "\t" } NR > 5 && $1 + 0 >= 100 { $3 = ""; $4 = ""; $5 = "" } { print }' \
+  "$tmp/data.trc" >"$tmp/gap.trc"
+"$bin/evaluate" --model "$tmp/identified.yaml" --trajectory "$tmp/gap.trc" --first-frame 100 \
+  --history 20 >"$tmp/gap.log"
+grep -q "80 frames x 15 markers at 100 Hz (20 of them history), 59 prediction starts (59 particle starts filled" "$tmp/gap.log" ||
+  { echo "history: unexpected"; cat "$tmp/gap.log"; exit 1; }
+
 expect_exit2() {  # expect_exit2 PATTERN ARGS...
   local pattern=$1; shift
   set +e; "$bin/evaluate" "$@" 2>"$tmp/err" >/dev/null; local rc=$?; set -e
@@ -35,5 +45,7 @@ expect_exit2() {  # expect_exit2 PATTERN ARGS...
 expect_exit2 "has no value (evaluate needs an identified model" --model "$tmp/free.yaml" --trajectory "$tmp/data.trc"
 expect_exit2 "--horizons: '0'" --model "$tmp/identified.yaml" --trajectory "$tmp/data.trc" --horizons 1,0
 expect_exit2 "--trajectory is required" --model "$tmp/identified.yaml"
+expect_exit2 "nothing to predict from (--history H" --model "$tmp/identified.yaml" --trajectory "$tmp/gap.trc" --first-frame 100
+expect_exit2 "option --history must be an integer" --model "$tmp/identified.yaml" --trajectory "$tmp/gap.trc" --history -1
 expect_exit2 "nope.trc" --model "$tmp/identified.yaml" --trajectory "$tmp/nope.trc"
 echo "test_evaluate: ok"
