@@ -691,7 +691,8 @@ void figure5(const Settings& s) {
       double rms[4] = {NAN, NAN, NAN, NAN};
       bool bounded = false;
       try {
-        const mme::PredictionReport pr = mme::evaluatePredictions(fitted, held, {10}, 10.0, split.held_start);
+        const mme::PredictionReport pr =
+            mme::evaluatePredictions(fitted, held, {10}, 10.0, split.held_start);
         for (const mme::PredictionError& row : pr.rows) rms[static_cast<int>(row.predictor)] = row.rms_m;
         bounded = pr.rollout_bounded;
       } catch (const mme::InputError& e) {

@@ -4,8 +4,9 @@
 // Parameter blocks: the smooth genes (theta, shared by every segment, bounded as the search space)
 // and one state per segment (positions and velocity x h of the free particles, metres both). A
 // segment's Jacobian is by forward differences through the simulator (one short simulation per
-// column, shared by its two blocks); the continuity's derivative along the next state is -I exactly. The linear solver is
-// sparse Cholesky of the normal equations (block-tridiagonal states bordered by theta).
+// column, shared by its two blocks); the continuity's derivative along the next state is -I
+// exactly. The linear solver is sparse Cholesky of the normal equations (block-tridiagonal states
+// bordered by theta).
 #include "motion_model_estimation/identification/output_error.h"
 
 #include <ceres/ceres.h>
@@ -140,7 +141,8 @@ class SegmentSimulation {
       const bool ok = simulate(th.data(), state, perturbed.data());
       th[j] = theta[j];
       if (ok)
-        for (int r = 0; r < rows_; ++r) jac_theta_[static_cast<size_t>(r) * np + j] = (perturbed[r] - residuals_[r]) / step;
+        for (int r = 0; r < rows_; ++r)
+          jac_theta_[static_cast<size_t>(r) * np + j] = (perturbed[r] - residuals_[r]) / step;
     }
     std::vector<double> st(state, state + ns);
     for (int j = 0; j < ns; ++j) {
@@ -149,7 +151,8 @@ class SegmentSimulation {
       const bool ok = simulate(theta, st.data(), perturbed.data());
       st[j] = state[j];
       if (ok)
-        for (int r = 0; r < rows_; ++r) jac_state_[static_cast<size_t>(r) * ns + j] = (perturbed[r] - residuals_[r]) / step;
+        for (int r = 0; r < rows_; ++r)
+          jac_state_[static_cast<size_t>(r) * ns + j] = (perturbed[r] - residuals_[r]) / step;
     }
   }
 
@@ -349,7 +352,8 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
   // The segments' simulations outlive the problem whose blocks read them.
   std::vector<std::unique_ptr<SegmentSimulation>> sims;
   for (int s = 0; s < S; ++s)
-    sims.push_back(std::make_unique<SegmentSimulation>(p.get(), segments[s].first, segments[s].second, s + 1 < S));
+    sims.push_back(std::make_unique<SegmentSimulation>(p.get(), segments[s].first,
+                                                       segments[s].second, s + 1 < S));
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);

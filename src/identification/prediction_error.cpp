@@ -71,6 +71,7 @@ bool fillFromNeighbours(const Observations& obs, const Model& model, int t, int 
   }
   return false;
 }
+
 PredictionReport evaluatePredictions(const Model& model, const Trajectory& trajectory,
                                      const std::vector<int>& horizons, double rollout_factor,
                                      int first_start) {
@@ -98,8 +99,8 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
     // A start needs every particle's position at t and its velocity: from the latest of the
     // kMaxVelocityGap frames before t where it is seen (x(t-1) when seen: the paper's start).
     // A particle unseen at t, or not seen in those frames, is filled from its neighbours' rigid
-    // motion (fillFromNeighbours: data up to t only); it is not scored from this start. A fixed particle
-    // moves as the model says, seen or not.
+    // motion (fillFromNeighbours: data up to t only); it is not scored from this start. A fixed
+    // particle moves as the model says, seen or not.
     bool usable = true;
     int filled = 0;
     s.x_m.assign(n, Eigen::Vector3d::Zero());
@@ -120,7 +121,9 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
         continue;
       }
       Eigen::Vector3d now, before;
-      usable = fillFromNeighbours(obs, model, t, i, &now) && fillFromNeighbours(obs, model, t - 1, i, &before);
+      usable = fillFromNeighbours(obs, model, t, i, &now) &&
+               fillFromNeighbours(obs, model, t - 1, i, &before);
+      if (!usable) break;
       s.x_m[i] = now;
       s.v_mps[i] = (now - before) / h;
       ++filled;
