@@ -6,9 +6,11 @@
 #include <rosbag/view.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <set>
+#include <string>
 
 #include "motion_model_estimation/MarkerFrame.h"
 #include "motion_model_estimation/core/error.h"
@@ -23,8 +25,10 @@ const std::string kMarkerFrameType = "motion_model_estimation/MarkerFrame";
 void writeBag(const std::string& path, const std::string& topic, const std::string& frame_id,
               const Trajectory& trajectory) {
   // rosbag writes in place; write to a temporary name and rename so readers never see a
-  // half-written bag.
-  const std::string tmp = path + ".tmp";
+  // half-written bag. The name is this writer's own (process and call), so that two writers of
+  // one path never share it: the last rename wins, whole.
+  static std::atomic<unsigned> calls{0};
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(calls++);
   try {
     rosbag::Bag bag;
     bag.open(tmp, rosbag::bagmode::Write);

@@ -3,8 +3,13 @@
 #include <rosbag/bag.h>
 #include <std_msgs/String.h>
 
+#include <dirent.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <string>
 
 #include "motion_model_estimation/core/error.h"
@@ -96,6 +101,43 @@ TEST(BagIo, NotABagAndMissingFileThrowNamingTheFile) {
   }
   std::remove(path.c_str());
   EXPECT_THROW(mme::readBag(tempPath("does_not_exist.bag"), ""), mme::InputError);
+}
+
+// Two writers of one path at once (two tools: two processes, each writing several times): each
+// writes a temporary file of its own and renames it, so the bag left is one of the two, whole,
+// and no temporary stays.
+TEST(BagIo, TwoWritersOfOnePathLeaveOneWholeBag) {
+  const std::string path = tempPath("two_writers.bag");
+  const mme::Trajectory a = makeTrajectory();
+  mme::Trajectory b = makeTrajectory();
+  b.resize(40);  // 40 frames, every sample occluded at the origin
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    int failures = 0;
+    for (int k = 0; k < 20; ++k) {
+      try {
+        mme::writeBag(path, "markers", "world", b);
+      } catch (const mme::InputError&) {
+        ++failures;
+      }
+    }
+    ::_exit(failures == 0 ? 0 : 1);
+  }
+  for (int k = 0; k < 20; ++k) mme::writeBag(path, "markers", "world", a);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "the other writer failed";
+  const mme::Trajectory out = mme::readBag(path, "");
+  EXPECT_TRUE(out.numFrames() == 25 || out.numFrames() == 40) << out.numFrames();
+  const std::string dir = path.substr(0, path.rfind('/') + 1);
+  const std::string base = path.substr(dir.size());
+  std::unique_ptr<DIR, int (*)(DIR*)> d(::opendir(dir.c_str()), ::closedir);
+  ASSERT_TRUE(d);
+  for (dirent* e = ::readdir(d.get()); e; e = ::readdir(d.get()))
+    EXPECT_NE(std::string(e->d_name).rfind(base + ".tmp", 0), 0u) << e->d_name;
+  std::remove(path.c_str());
 }
 
 TEST(BagIo, UnwritablePathThrowsAndLeavesNothing) {
