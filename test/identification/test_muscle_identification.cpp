@@ -165,8 +165,9 @@ TEST(MuscleIdentification, FreeMusclesOnDataWithoutAControllerChangeTheCostByLes
 // contact and servos move the markers between frames (80 substeps), so on its own noiseless
 // frames the paper's one-step cost at the true values is far from round-off (measured 0.049 m^2
 // over 50 frames) and the fourth-difference noise estimate reads 0.8 mm: `identify --cost auto`
-// treats the data as noisy and goes to the output error, whose finite-difference Jacobian is too
-// slow for this scene today. These facts are what a faster output error has to start from.
+// treats the data as noisy and goes to the output error, which on this scene stops short of the
+// truth even when started there (`bench_paper --only walker_oe`). These facts are what a better
+// output error has to start from.
 TEST(MuscleIdentification, TheWalkersFramesAreNotExactForTheOneStepCost) {
   const mme::Scene scene = mme::makeScene("walker");
   const mme::Trajectory data = mme::simulateTrajectory(scene.model, 50, scene.model.frame_rate_hz);
