@@ -38,7 +38,8 @@ std::vector<int> parseHorizons(const std::string& text) {
 }
 
 int run(int argc, char** argv) {
-  mme::CliArgs args(argc, argv, {"model", "trajectory", "topic", "first-frame", "frames", "history", "horizons", "csv"},
+  mme::CliArgs args(argc, argv,
+                    {"model", "trajectory", "topic", "first-frame", "frames", "history", "horizons", "csv"},
                     {"help"});
   if (args.has("help")) {
     std::cout << kUsage;
