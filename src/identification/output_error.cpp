@@ -82,7 +82,6 @@ class SegmentSimulation {
   }
 
   int observedSamples() const { return observed_; }
-  bool hasNext() const { return has_next_; }
 
   /// Copies rows [row0, row0 + count) of the residuals (and of the Jacobians along theta and
   /// the state when the pointers are given, row-major) for (theta, state). False when the

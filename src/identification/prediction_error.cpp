@@ -92,8 +92,7 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
   const size_t predictors = 4;
   std::vector<double> sum2(horizons.size() * predictors, 0.0);
   std::vector<long> count(horizons.size() * predictors, 0);
-  int rollout_start = -1;  // the first start: the long rollout's
-  State s, first_state;
+  State s, first_state;  // first_state: the first start's, the long rollout's
   const int judged_from = std::max(first_start - 2, 0);  // the judged frames' first
   for (int t = std::max(first_start, 2); t + 1 < frames; ++t) {
     // A start needs every particle's position at t and its velocity: from the latest of the
@@ -133,10 +132,7 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
     report.filled += filled;
     // The model's open-loop motion from the start, up to the longest horizon in reach.
     const int reach = std::min(max_k, frames - 1 - t);
-    if (rollout_start < 0) {
-      rollout_start = t;
-      first_state = s;
-    }
+    if (first_state.x_m.empty()) first_state = s;
     std::vector<std::vector<Eigen::Vector3d>> path(reach + 1);
     path[0] = s.x_m;
     for (int k = 1; k <= reach; ++k) {

@@ -40,6 +40,13 @@ struct Noisy {
     mme::addGaussianNoise(&d, sigma, seed);
     return d;
   }
+  /// The true values moved by +-offset in the search space (alternate signs), reflected in bounds.
+  std::vector<double> offStart(const mme::ParameterSpace& space, double offset) const {
+    std::vector<double> start = space.toSearch(true_values);
+    for (size_t k = 0; k < start.size(); ++k)
+      start[k] = space.reflect(k, start[k] + (k % 2 ? offset : -offset));
+    return start;
+  }
 };
 
 TEST(OutputError, MarkerNoiseIsEstimatedFromTheDataAlone) {
@@ -58,8 +65,7 @@ TEST(OutputError, ReachesTheCramerRaoBoundOnANoisyScene) {
   Noisy n;
   const mme::Trajectory data = n.noisy(1e-4, 7);
   const mme::ParameterSpace space(n.search, data);
-  std::vector<double> start = space.toSearch(n.true_values);
-  for (size_t k = 0; k < start.size(); ++k) start[k] = space.reflect(k, start[k] + (k % 2 ? 0.02 : -0.02));
+  const std::vector<double> start = n.offStart(space, 0.02);
   const mme::OutputErrorResult r = mme::estimateOutputError(n.search, data, space, start);
   ASSERT_TRUE(r.ran) << r.reason;
   EXPECT_TRUE(r.converged) << r.termination;
@@ -110,8 +116,7 @@ TEST(OutputError, ThreadsShareEachSegmentsSimulationWithoutChangingTheAnswer) {
   Noisy n;
   const mme::Trajectory data = n.noisy(1e-4, 11);
   const mme::ParameterSpace space(n.search, data);
-  std::vector<double> start = space.toSearch(n.true_values);
-  for (size_t k = 0; k < start.size(); ++k) start[k] = space.reflect(k, start[k] + (k % 2 ? 0.05 : -0.05));
+  const std::vector<double> start = n.offStart(space, 0.05);
   mme::OutputErrorOptions o;
   o.max_iterations = 6;
   o.segment_frames = 5;  // many segments: the threads' blocks interleave
