@@ -73,8 +73,10 @@ struct Problem {
 /// both blocks at once.
 class SegmentSimulation {
  public:
-  SegmentSimulation(const Problem* p, int first, int last, bool has_next)
-      : p_(p), first_(first), last_(last), has_next_(has_next), model_(p->model), sim_(p->model) {
+  /// `theta_columns` false: the Jacobian along theta is left zero (a fit with theta held).
+  SegmentSimulation(const Problem* p, int first, int last, bool has_next, bool theta_columns = true)
+      : p_(p), first_(first), last_(last), has_next_(has_next), theta_columns_(theta_columns),
+        model_(p->model), sim_(p->model) {
     const int end = has_next ? last : last + 1;
     for (int t = first; t < end; ++t)
       for (int i : p->free_particles) observed_ += p->obs.isOccluded(t, i) ? 0 : 1;
@@ -82,6 +84,13 @@ class SegmentSimulation {
   }
 
   int observedSamples() const { return observed_; }
+
+  /// Forgets what it computed (the weights changed).
+  void invalidate() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    key_valid_ = false;
+    jacobian_valid_ = false;
+  }
 
   /// Copies rows [row0, row0 + count) of the residuals (and of the Jacobians along theta and
   /// the state when the pointers are given, row-major) for (theta, state). False when the
@@ -132,7 +141,7 @@ class SegmentSimulation {
     jac_state_.assign(static_cast<size_t>(rows_) * ns, 0.0);
     std::vector<double> perturbed(rows_);
     std::vector<double> th(theta, theta + np);
-    for (int j = 0; j < np; ++j) {
+    for (int j = 0; j < (theta_columns_ ? np : 0); ++j) {
       const Gene& g = p_->space->gene(p_->smooth[j]);
       double step = 1e-7 * std::max({std::fabs(th[j]), 1e-3 * (g.upper - g.lower), 1e-8});
       if (th[j] + step > g.upper) step = -step;
@@ -210,6 +219,7 @@ class SegmentSimulation {
   const Problem* p_;
   int first_, last_;
   bool has_next_;
+  bool theta_columns_;
   int observed_ = 0;
   int rows_ = 0;
   Model model_;
@@ -303,8 +313,9 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
   out.values = space.toPhysical(start_genes);
   out.std_devs.assign(start_genes.size(), std::numeric_limits<double>::quiet_NaN());
   out.unidentifiable.assign(start_genes.size(), 0);
-  if (options.segment_frames < 2 || !(options.continuity_weight > 0.0)) {
-    out.reason = "segment_frames must be >= 2 and continuity_weight > 0";
+  if (options.segment_frames < 2 || !(options.continuity_weight > 0.0) ||
+      !(options.first_continuity_weight >= 0.0)) {
+    out.reason = "segment_frames must be >= 2, continuity_weight > 0 and first_continuity_weight >= 0";
     return out;
   }
   auto p = std::make_unique<Problem>();
@@ -348,6 +359,42 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
   std::vector<std::vector<double>> states(S, std::vector<double>(ns));
   for (int s = 0; s < S; ++s) dataState(*p, segments[s].first, states[s].data());
 
+  if (options.start_state_frames > 0) {
+    // Per segment, the start state whose simulation (theta held) best matches the segment's
+    // first frames: a dense problem of one state, the same residuals as the observations'.
+    ceres::Solver::Options local;
+    local.linear_solver_type = ceres::DENSE_QR;
+    local.max_num_iterations = 20;
+    local.logging_type = ceres::SILENT;
+    for (int s = 0; s < S && !(options.cancel && options.cancel->load()); ++s) {
+      const int first = segments[s].first;
+      SegmentSimulation sim(p.get(), first, std::min(first + options.start_state_frames, frames - 1),
+                            false, false);
+      if (sim.observedSamples() == 0) continue;
+      ceres::Problem::Options local_options;
+      local_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+      ceres::Problem fit(local_options);
+      fit.AddResidualBlock(new SegmentCost(&sim, p.get(), SegmentCost::Part::kObservations),
+                           nullptr, theta.data(), states[s].data());
+      fit.SetParameterBlockConstant(theta.data());
+      const std::vector<double> from_data = states[s];
+      ceres::Solver::Summary fit_summary;
+      ceres::Solve(local, &fit, &fit_summary);
+      // Kept only when it matches the whole segment better: particles unseen in the first frames
+      // (occlusion) can make a fit of a few frames wrong for the rest.
+      SegmentSimulation whole(p.get(), first, segments[s].second, false, false);
+      const auto segmentCost = [&](const std::vector<double>& state) {
+        std::vector<double> r(3 * whole.observedSamples());
+        if (!whole.rows(theta.data(), state.data(), 0, static_cast<int>(r.size()), r.data(), nullptr, nullptr))
+          return std::numeric_limits<double>::infinity();
+        double sum = 0.0;
+        for (double v : r) sum += v * v;
+        return sum;
+      };
+      if (!fit_summary.IsSolutionUsable() || !(segmentCost(states[s]) < segmentCost(from_data)))
+        states[s] = from_data;
+    }
+  }
   // The segments' simulations outlive the problem whose blocks read them.
   std::vector<std::unique_ptr<SegmentSimulation>> sims;
   for (int s = 0; s < S; ++s)
@@ -395,7 +442,11 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
   solver.function_tolerance = 1e-14;
   solver.gradient_tolerance = 1e-16;
   solver.parameter_tolerance = 1e-12;
-  if (options.max_time_s > 0.0) solver.max_solver_time_in_seconds = options.max_time_s;
+  if (options.max_time_s > 0.0) {
+    // The start-state fits spent part of the budget.
+    const double spent_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+    solver.max_solver_time_in_seconds = std::max(1e-3, options.max_time_s - spent_s);
+  }
   // The projected line search Ceres runs on a bounded problem interpolates with function values
   // only: its default (cubic) asks for the Jacobian at every trial point, here a simulation per
   // column, nearly doubling the cost of an iteration.
@@ -404,9 +455,21 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
   CancelCallback cancel(options.cancel);
   if (options.cancel) solver.callbacks.push_back(&cancel);
   ceres::Solver::Summary summary;
-  ceres::Solve(solver, &problem, &summary);
+  int first_stage_iterations = 0;
+  const double hard_w_cont = p->w_cont;
+  if (options.first_continuity_weight > 0.0 && options.first_continuity_weight != options.continuity_weight) {
+    p->w_cont = options.first_continuity_weight / out.noise_std_prior_m;
+    for (auto& sim : sims) sim->invalidate();
+    ceres::Solve(solver, &problem, &summary);
+    first_stage_iterations = static_cast<int>(summary.iterations.size()) - 1;
+    p->w_cont = hard_w_cont;
+    for (auto& sim : sims) sim->invalidate();
+    if (options.max_time_s > 0.0)
+      solver.max_solver_time_in_seconds = std::max(1e-3, solver.max_solver_time_in_seconds - summary.total_time_in_seconds);
+  }
+  if (!(options.cancel && options.cancel->load())) ceres::Solve(solver, &problem, &summary);
   out.ran = true;
-  out.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  out.iterations = first_stage_iterations + static_cast<int>(summary.iterations.size()) - 1;
   out.converged = summary.termination_type == ceres::CONVERGENCE;
   out.termination = summary.message;
   out.observation_cost_m2 = observationCost();

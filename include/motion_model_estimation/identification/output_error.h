@@ -29,8 +29,20 @@ struct OutputErrorOptions {
   /// Weight of a continuity residual relative to an observation's: large = nearly hard (the
   /// model's own motion between segments); a soft weight throws information away.
   double continuity_weight = 1000.0;
+  /// Continuation: when > 0, the problem is first solved with this continuity weight (segments
+  /// nearly free to follow their own data: a start far from the answer does not have to carry
+  /// one wrong motion over every segment), then from there with `continuity_weight`. Each stage
+  /// gets max_iterations. 0 = one stage.
+  double first_continuity_weight = 1.0;
   double noise_std_m = 0.0;         ///< marker noise; 0 = estimated (estimateMarkerNoise)
   int max_iterations = 100;
+  /// Start states from the model: each segment's start state (positions and velocities) is
+  /// the one whose simulation with the start's parameters best matches the data over the
+  /// segment's first `start_state_frames` frames after its start (a small least-squares fit per
+  /// segment, parameters held), instead of the data's positions and frame differences (0). The
+  /// frame difference is not the velocity when stiff forces act within a frame, and a joint fit
+  /// from it moves the parameters to absorb the error (README "Identifying the walker").
+  int start_state_frames = 2;
   double max_time_s = 0.0;          ///< 0 = no limit
   int threads = 1;                  ///< Ceres' threads evaluating segments
   bool estimate_std = true;         ///< 1-sigma std per parameter from the Jacobian at the optimum
@@ -57,7 +69,7 @@ struct OutputErrorResult {
   double start_cost_m2 = 0.0;       ///< the same at the start (states from the data)
   int observations = 0;             ///< observed coordinates compared
   int segments = 0;
-  int iterations = 0;
+  int iterations = 0;               ///< of both stages
   bool converged = false;           ///< Ceres reported convergence (not a limit)
   std::string termination;          ///< Ceres' message
   double wall_time_s = 0.0;
