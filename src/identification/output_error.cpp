@@ -366,7 +366,14 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
     local.linear_solver_type = ceres::DENSE_QR;
     local.max_num_iterations = 20;
     local.logging_type = ceres::SILENT;
+    const auto spent_s = [&]() {
+      return std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+    };
     for (int s = 0; s < S && !(options.cancel && options.cancel->load()); ++s) {
+      if (options.max_time_s > 0.0) {
+        if (spent_s() >= options.max_time_s) break;  // the rest keep the data's states
+        local.max_solver_time_in_seconds = options.max_time_s - spent_s();
+      }
       const int first = segments[s].first;
       SegmentSimulation sim(p.get(), first, std::min(first + options.start_state_frames, frames - 1),
                             false, false);
