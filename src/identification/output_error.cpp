@@ -320,6 +320,9 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
   }
   auto p = std::make_unique<Problem>();
   p->obs = prepareObservations(model, trajectory);
+  const auto elapsed_s = [&]() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+  };
   if (p->obs.frames < 3) {
     out.reason = "fewer than 3 frames";
     return out;
@@ -366,13 +369,10 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
     local.linear_solver_type = ceres::DENSE_QR;
     local.max_num_iterations = 20;
     local.logging_type = ceres::SILENT;
-    const auto spent_s = [&]() {
-      return std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
-    };
     for (int s = 0; s < S && !(options.cancel && options.cancel->load()); ++s) {
       if (options.max_time_s > 0.0) {
-        if (spent_s() >= options.max_time_s) break;  // the rest keep the data's states
-        local.max_solver_time_in_seconds = options.max_time_s - spent_s();
+        if (elapsed_s() >= options.max_time_s) break;  // the rest keep the data's states
+        local.max_solver_time_in_seconds = options.max_time_s - elapsed_s();
       }
       const int first = segments[s].first;
       SegmentSimulation sim(p.get(), first, std::min(first + options.start_state_frames, frames - 1),
@@ -392,7 +392,8 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
       SegmentSimulation whole(p.get(), first, segments[s].second, false, false);
       const auto segmentCost = [&](const std::vector<double>& state) {
         std::vector<double> r(3 * whole.observedSamples());
-        if (!whole.rows(theta.data(), state.data(), 0, static_cast<int>(r.size()), r.data(), nullptr, nullptr))
+        if (!whole.rows(theta.data(), state.data(), 0, static_cast<int>(r.size()), r.data(),
+                        nullptr, nullptr))
           return std::numeric_limits<double>::infinity();
         double sum = 0.0;
         for (double v : r) sum += v * v;
@@ -449,11 +450,9 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
   solver.function_tolerance = 1e-14;
   solver.gradient_tolerance = 1e-16;
   solver.parameter_tolerance = 1e-12;
-  if (options.max_time_s > 0.0) {
-    // The start-state fits spent part of the budget.
-    const double spent_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
-    solver.max_solver_time_in_seconds = std::max(1e-3, options.max_time_s - spent_s);
-  }
+  // The start-state fits spent part of the budget.
+  if (options.max_time_s > 0.0)
+    solver.max_solver_time_in_seconds = std::max(1e-3, options.max_time_s - elapsed_s());
   // The projected line search Ceres runs on a bounded problem interpolates with function values
   // only: its default (cubic) asks for the Jacobian at every trial point, here a simulation per
   // column, nearly doubling the cost of an iteration.
@@ -464,7 +463,9 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
   ceres::Solver::Summary summary;
   int first_stage_iterations = 0;
   const double hard_w_cont = p->w_cont;
-  if (options.first_continuity_weight > 0.0 && options.first_continuity_weight != options.continuity_weight) {
+  if (options.first_continuity_weight > 0.0 &&
+      options.first_continuity_weight != options.continuity_weight) {
+    // Continuation: soft continuity first (the cached residuals carry the weight: recomputed).
     p->w_cont = options.first_continuity_weight / out.noise_std_prior_m;
     for (auto& sim : sims) sim->invalidate();
     ceres::Solve(solver, &problem, &summary);
@@ -472,7 +473,7 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
     p->w_cont = hard_w_cont;
     for (auto& sim : sims) sim->invalidate();
     if (options.max_time_s > 0.0)
-      solver.max_solver_time_in_seconds = std::max(1e-3, solver.max_solver_time_in_seconds - summary.total_time_in_seconds);
+      solver.max_solver_time_in_seconds = std::max(1e-3, options.max_time_s - elapsed_s());
   }
   if (!(options.cancel && options.cancel->load())) ceres::Solve(solver, &problem, &summary);
   out.ran = true;
