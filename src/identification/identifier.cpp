@@ -455,12 +455,9 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
     }
     OutputErrorResult best_oe;
     // Each start is scouted with a few iterations; the best one is then fitted to convergence.
-    // Only a scout runs the soft-continuity stage: the fits that continue from a scout's answer
-    // start near the hard problem's optimum, which a soft stage would leave again.
     const auto fit = [&](const Model& m, const std::vector<double>& from, int max_iterations,
-                         bool estimate_std, bool scout) {
+                         bool estimate_std) {
       OutputErrorOptions o = options.output_error;
-      if (!scout) o.first_continuity_weight = 0.0;
       o.max_iterations = std::min(o.max_iterations, max_iterations);
       o.threads = std::max(o.threads, options.es.threads);
       if (options.max_wall_time_s > 0.0) {
@@ -478,7 +475,7 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
     };
     std::string failed;
     for (const std::vector<double>& from : starts) {
-      OutputErrorResult oe = fit(model, from, kScoutIterations, false, true);
+      OutputErrorResult oe = fit(model, from, kScoutIterations, false);
       if (oe.ran && !usable(oe)) failed = oe.termination;
       if (!usable(oe)) oe.ran = false;
       if (oe.ran && (!best_oe.ran || oe.observation_cost_m2 < best_oe.observation_cost_m2)) best_oe = oe;
@@ -496,7 +493,7 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
       if (needed > model.substeps) {
         Model finer = model;
         finer.substeps = needed;
-        const OutputErrorResult oe = fit(finer, best_oe.genes, kScoutIterations, false, false);
+        const OutputErrorResult oe = fit(finer, best_oe.genes, kScoutIterations, false);
         const bool better = usable(oe) && oe.observation_cost_m2 < 0.5 * best_oe.observation_cost_m2;
         note("the stiffest mode has omega*h = " + formatValue(omega_h) + " per frame: " +
                  std::to_string(needed) + " substeps per frame fit the frames " +
@@ -513,7 +510,7 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
     }
     if (best_oe.ran) {
       const OutputErrorResult oe = fit(model, best_oe.genes, options.output_error.max_iterations,
-                                       options.estimate_std, false);
+                                       options.estimate_std);
       if (usable(oe) && oe.observation_cost_m2 <= best_oe.observation_cost_m2 * (1.0 + 1e-9)) best_oe = oe;
       note("output error: " + std::to_string(best_oe.segments) + " segments, " +
                std::to_string(best_oe.iterations) + " iterations of the final fit (" +

@@ -81,8 +81,6 @@ void OnlineEstimator::startRefinement(std::shared_ptr<const Cost> cost, const Mo
   const bool output_error = use_output_error_;
   const std::vector<double> warm = output_error_.ran ? output_error_.genes : std::vector<double>();
   OutputErrorOptions oe_options = options_.output_error;
-  // From its own last answer the fit starts near the hard-continuity optimum: no soft stage.
-  if (!warm.empty()) oe_options.first_continuity_weight = 0.0;
   // The thread owns copies of what it reads (the space, the start, the window) and shares the
   // window's cost.
   job->thread = std::thread([out, cost, space = es_->space(), start, settings, algorithm,
