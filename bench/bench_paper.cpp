@@ -588,6 +588,22 @@ void structureRealExperiment(const Settings& s) {
   std::fclose(g);
 }
 
+/// The walker's first 50 noiseless frames and its muscle-free parameters (issue 16's targets).
+struct WalkerCase {
+  mme::Scene scene = mme::makeScene("walker");
+  int frames = 50;
+  mme::Trajectory data = mme::simulateTrajectory(scene.model, frames, scene.model.frame_rate_hz);
+  std::vector<mme::ParamRef> refs = mme::freeParameters(scene.model);
+  std::vector<double> truth = mme::getValues(scene.model, refs);
+
+  /// The true values off by +-`off` (relative, alternate signs: - on even indices).
+  std::vector<double> off(double off) const {
+    std::vector<double> v = truth;
+    for (size_t k = 0; k < v.size(); ++k) v[k] *= k % 2 ? 1.0 + off : 1.0 - off;
+    return v;
+  }
+};
+
 /// How close an answer on the walker is (issue 16's targets): the parameters within 1 % of the
 /// truth, the median and worst relative errors (and the worst's name), and the open loop's RMS
 /// distance from the data at the last frame.
@@ -633,11 +649,11 @@ void walkerOutputError(const Settings& s) {
   std::FILE* f = openCsv(s.out_dir + "/walker_oe.csv",
                          "start_off,continuity,segment_frames,iterations,termination,wall_s,start_cost_m2,"
                          "cost_m2,within_1pct,median_error,worst_error,open_loop_1s_rms_m");
-  const mme::Scene scene = mme::makeScene("walker");
-  const int frames = 50;
-  const mme::Trajectory data = mme::simulateTrajectory(scene.model, frames, scene.model.frame_rate_hz);
-  const std::vector<mme::ParamRef> refs = mme::freeParameters(scene.model);
-  const std::vector<double> truth = mme::getValues(scene.model, refs);
+  const WalkerCase walker;
+  const mme::Scene& scene = walker.scene;
+  const mme::Trajectory& data = walker.data;
+  const std::vector<mme::ParamRef>& refs = walker.refs;
+  const std::vector<double>& truth = walker.truth;
   const mme::ParameterSpace space(scene.model, data);
   struct Run {
     double off;
@@ -645,8 +661,7 @@ void walkerOutputError(const Settings& s) {
   };
   std::vector<std::vector<double>> answers;
   for (const Run run : {Run{0.0, true}, Run{0.01, true}, Run{0.01, false}}) {
-    std::vector<double> start = truth;
-    for (size_t k = 0; k < start.size(); ++k) start[k] *= k % 2 ? 1.0 + run.off : 1.0 - run.off;
+    const std::vector<double> start = walker.off(run.off);
     mme::OutputErrorOptions o;
     o.segment_frames = 10;
     o.max_iterations = s.quick ? 3 : 100;
@@ -695,30 +710,25 @@ void walkerIdentify(const Settings& s) {
   std::FILE* f = openCsv(s.out_dir + "/walker_identify.csv",
                          "frames,generations,estimator,wall_s,within_1pct,median_error,worst_error,"
                          "worst_parameter,open_loop_1s_rms_m");
-  const mme::Scene scene = mme::makeScene("walker");
-  const int frames = 50;
-  const mme::Trajectory data = mme::simulateTrajectory(scene.model, frames, scene.model.frame_rate_hz);
-  const std::vector<mme::ParamRef> refs = mme::freeParameters(scene.model);
-  std::vector<double> guesses = mme::getValues(scene.model, refs);
-  for (size_t k = 0; k < guesses.size(); ++k) guesses[k] *= k % 2 ? 1.01 : 0.99;
-  Model start = scene.model;
-  mme::setValues(start, refs, guesses);
+  const WalkerCase walker;
+  Model start = walker.scene.model;
+  mme::setValues(start, walker.refs, walker.off(0.01));
   mme::IdentifyOptions o = mme::identifyOptionsFor(s.preset);
   o.generations = s.quick ? 3 : 100;
   o.max_wall_time_s = s.quick ? 60.0 : 500.0;
   o.es.threads = s.threads;
   o.estimate_std = false;
   const auto began = std::chrono::steady_clock::now();
-  const mme::IdentifyResult r = mme::identifyModel(start, data, o);
+  const mme::IdentifyResult r = mme::identifyModel(start, walker.data, o);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
-  const WalkerScore score = scoreWalker(scene.model, data, r.values);
-  std::fprintf(f, "%d,%d,%s,%.1f,%d,%.6g,%.6g,%s,%.6g\n", frames, o.generations, r.estimator.c_str(),
+  const WalkerScore score = scoreWalker(walker.scene.model, walker.data, r.values);
+  std::fprintf(f, "%d,%d,%s,%.1f,%d,%.6g,%.6g,%s,%.6g\n", walker.frames, o.generations, r.estimator.c_str(),
                wall_s, score.within_1pct, score.median_error, score.worst_error, score.worst_name.c_str(),
                score.open_loop_rms_m);
   std::fclose(f);
   std::printf("walker_identify: %s, %.0f s: %d of %zu parameters within 1 %%, median %.3g %%, worst "
               "%.3g %% (%s); open loop after 1 s %.3g m RMS\n", r.estimator.c_str(), wall_s,
-              score.within_1pct, refs.size(), 100.0 * score.median_error, 100.0 * score.worst_error,
+              score.within_1pct, walker.refs.size(), 100.0 * score.median_error, 100.0 * score.worst_error,
               score.worst_name.c_str(), score.open_loop_rms_m);
 }
 
