@@ -1,6 +1,7 @@
 // identify: offline identification of a trajectory file or bag (SPEC section 7).
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -13,6 +14,7 @@
 #include "motion_model_estimation/identification/identifier.h"
 #include "motion_model_estimation/identification/marker_model.h"
 #include "motion_model_estimation/identification/muscle_placement.h"
+#include "motion_model_estimation/identification/sensor_muscles.h"
 #include "motion_model_estimation/identification/structure_selection.h"
 #include "motion_model_estimation/io/model_yaml.h"
 
@@ -27,7 +29,8 @@ const char* kUsage =
     "                [--cost auto|short_term|output_error] [--segment-frames K]\n"
     "                [--refine bobyqa|newuoa|praxis|levenberg_marquardt] [--refine-start G]\n"
     "                [--refine-period G] [--select-structure]\n"
-    "                [--add-muscles INPUTS] [--muscle-hidden H]\n";
+    "                [--add-muscles INPUTS] [--muscle-hidden H]\n"
+    "                [--sensor-muscles SENSORS] [--muscle-neighbours K]\n";
 
 std::string formatMetres(double m) {
   char text[32];
@@ -40,7 +43,7 @@ int run(int argc, char** argv) {
                     {"model", "trajectory", "topic", "out", "method", "generations", "population",
                      "window-frames", "first-frame", "frames", "seed", "threads", "target-cost",
                      "max-time-s", "refine", "refine-start", "refine-period", "preset", "patience", "cost", "segment-frames",
-                     "add-muscles", "muscle-hidden"},
+                     "add-muscles", "muscle-hidden", "sensor-muscles", "muscle-neighbours"},
                     {"compare-to-model", "quiet", "help", "select-structure"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -156,6 +159,22 @@ int run(int argc, char** argv) {
                 "unit(s)\n", muscles, reads, placement.hidden);
   }
 
+  const bool sensor_muscles = args.has("sensor-muscles") || args.has("muscle-neighbours");
+  mme::SensorMuscleOptions sensor_options;
+  if (sensor_muscles) {
+    if (compare)
+      throw mme::InputError("--compare-to-model and --sensor-muscles do not go together (the "
+                            "muscles are not the file's)");
+    sensor_options.sensors = static_cast<int>(
+        args.getInt("sensor-muscles", sensor_options.sensors, 1, mme::kMaxMuscleInputs));
+    sensor_options.neighbours = static_cast<int>(
+        args.getInt("muscle-neighbours", sensor_options.neighbours, 0, 64));
+    sensor_options.progress = [&](const std::string& line) {
+      if (!quiet) std::printf("identify: %s\n", line.c_str());
+      std::fflush(stdout);
+    };
+  }
+
   const bool tty = isatty(STDOUT_FILENO);
   double last_print_s = -1.0;
   auto progress = [&](const mme::Progress& p) {
@@ -212,6 +231,31 @@ int run(int argc, char** argv) {
               mme::refineAlgorithmName(options.es.refine_algorithm),
               mme::refineStatusName(r.last_refine_status));
 
+  mme::Model out_model = r.model;
+  std::vector<std::string> notes = r.notes;
+  if (sensor_muscles) {
+    // Sensor muscles on the identified model (sensor_muscles.h): fitted by least squares, the
+    // ridge chosen on the last 20 % of the frames; kept only where they predict those better.
+    const mme::SensorMuscleResult sm = mme::addSensorMuscles(r.model, trajectory, sensor_options);
+    char line[300];
+    std::snprintf(line, sizeof(line),
+                  "sensor muscles: %d sensors, %d muscles, ridge %.0e; %d frames ahead on the "
+                  "last frames %.3g m (passive %.3g m, constant velocity %.3g m)%s",
+                  sm.sensors, sm.muscles, sm.ridge, sensor_options.horizon_frames,
+                  sm.ridge_rms_m[std::find(sensor_options.ridges.begin(), sensor_options.ridges.end(),
+                                           sm.ridge) - sensor_options.ridges.begin()],
+                  sm.passive_rms_m, sm.constant_velocity_rms_m,
+                  sm.better_than_passive ? "" : ": not better than the passive model, which is kept");
+    std::printf("identify: %s\n", line);
+    if (!sm.better_than_passive)
+      std::fprintf(stderr, "identify: warning: the sensor muscles did not predict the held-out "
+                   "frames better than the passive model (or their rollout was unbounded): the "
+                   "passive model is written\n");
+    else
+      out_model = sm.model;
+    notes.push_back(line);
+  }
+
   mme::IdentificationInfo info;
   info.method = r.estimator == "output_error" ? "es+output_error" : "es";
   info.global_cost = r.global_cost;
@@ -229,12 +273,12 @@ int run(int argc, char** argv) {
       ++flagged;
     }
   }
-  info.notes = r.notes;
+  info.notes = notes;
   if (flagged > 0)
     std::fprintf(stderr, "identify: warning: %zu parameter(s) ended within 1 %% of a search bound "
                  "(flag column); the answer may lie beyond: give wider min/max in the model file\n",
                  flagged);
-  mme::writeModelFile(out_path, r.model, &info);
+  mme::writeModelFile(out_path, out_model, &info);
   std::printf("identify: wrote %s\n", out_path.c_str());
   return 0;
 }

@@ -1,0 +1,81 @@
+// Sensor muscles (issue 16, real gait): muscles that read the body's posture, fitted by least
+// squares.
+//
+// Muscles placed on the passive bonds and reading their nearest bonds (muscle_placement.h) read
+// near-rigid marker pairs, whose elongations carry almost nothing of a gait's phase; their
+// prediction of real walks stays where the passive model's is. Here the muscles read *sensor*
+// bonds instead: the S pairs of particles whose distance varies most over the data (a wrist to a
+// hip, an ankle to the other ankle: what changes through a stride), each a spring of zero
+// stiffness (it exerts nothing, it only measures) whose rest length is the pair's mean length.
+// Every muscle reads all S sensors (2S network inputs: elongations and their speeds), linear
+// (hidden 0), and has its own type: its own network, stiffness and damping. Muscles sit on the
+// model's two-particle bonds with an elongation, on the sensor pairs, and between every particle
+// and its `neighbours` nearest (mean distance over the data), so that every particle can be
+// pushed in three directions.
+//
+// With the activation linearised (a = gain tanh(y) ~ gain y, y linear in the network's
+// parameters), a muscle's tension k e + c s + gain y is linear in (k, c, gain w2, gain b2), and so
+// is Newton's law written on every observed frame with the passive model's forces known:
+//   m_i a_i - F_passive,i(x, v) = sum over muscles at i of +-(k e + c s + gain y) u
+// (accelerations and velocities from frame differences, as in the paper's one-step prediction).
+// This is a ridge-regularised linear least-squares problem (the columns scaled to unit RMS, the
+// ridge relative to the mean diagonal of the normal matrix), solved in closed form: no search
+// over thousands of network weights. The ridge is chosen by holding out the data's last
+// `validation_fraction`: each candidate is fitted on the frames before and judged by the
+// open-loop prediction `horizon_frames` ahead on the held-out ones (evaluatePredictions, its
+// rollout bounded); the chosen one is refitted on every frame. The gain is then set to
+// `gain_margin` times the largest linear activation over the fitted frames and the weights
+// divided by it, so tanh stays within 0.4 % of linear where the data went (and bounds the
+// activation beyond).
+//
+// The muscles' and sensors' parameters are written fixed (identified here, not by the search).
+// Frames where a sensor is unseen, and particles whose bond partners are unseen, drop out.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "motion_model_estimation/core/model.h"
+#include "motion_model_estimation/core/trajectory.h"
+
+namespace mme {
+
+struct SensorMuscleOptions {
+  int sensors = 16;          ///< sensor bonds every muscle reads (1..kMaxMuscleInputs)
+  int neighbours = 4;        ///< muscles from each particle to its nearest particles (0..)
+  /// Candidate ridges, relative to the mean diagonal of the normal matrix (scaled columns).
+  std::vector<double> ridges = {1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1};
+  double validation_fraction = 0.2;  ///< last share of the frames that chooses the ridge
+  int horizon_frames = 10;           ///< the validation's open-loop horizon
+  double gain_margin = 10.0;         ///< gain = margin x the largest linear activation [1]
+  /// A pair is a sensor or a neighbour muscle only when both particles are seen together in at
+  /// least this share of the frames.
+  double min_seen_share = 0.9;
+  std::function<void(const std::string&)> progress;  ///< one line per step (may be empty)
+};
+
+struct SensorMuscleResult {
+  Model model;                ///< the passive model with sensors and fitted muscles
+  int sensors = 0, muscles = 0;
+  size_t unknowns = 0;        ///< linear unknowns (muscles x (2 sensors + 3))
+  size_t rows = 0;            ///< equations of the final fit (3 per particle and frame)
+  double ridge = 0.0;         ///< the chosen relative ridge
+  std::vector<double> ridge_rms_m;       ///< per candidate: validation RMS horizon ahead (NaN: failed)
+  std::vector<int> ridge_bounded;        ///< per candidate: its validation rollout bounded
+  double passive_rms_m = 0.0;            ///< the passive model on the same validation frames
+  double constant_velocity_rms_m = 0.0;  ///< the constant-velocity guess there
+  /// The chosen fit predicted the validation frames better than the passive model, its rollout
+  /// bounded; when false, keep the passive model.
+  bool better_than_passive = false;
+  double residual_rms_m = 0.0;  ///< the final fit's one-step residual, a h^2 [m]
+};
+
+/// Places and fits sensor muscles on `passive` (its values are the passive forces; every
+/// parameter it needs must have a value). `data` has the model's particles as markers, in the
+/// model's order. Throws InputError on unusable input (options out of range, too few frames or
+/// sensors, no usable equation).
+SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data,
+                                    const SensorMuscleOptions& options = {});
+
+}  // namespace mme
