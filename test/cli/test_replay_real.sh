@@ -37,7 +37,7 @@ set -e
 cat "$tmp/replay.log"
 [ "$rc" -eq 0 ] || { echo "FAIL: replay-real exited $rc"; tail -30 "$tmp/work/sample26_piece.replay.log"; exit 1; }
 row=$(grep '^sample26_piece.trc,' "$tmp/work/summary.csv")
-IFS=, read -r _ markers frames rate occluded chosen bonds _ _ _ _ _ _ accepted rejected seen span _ check <<<"$row"
+IFS=, read -r _ markers frames rate occluded chosen bonds _ _ _ _ _ _ accepted rejected seen span _ muscles sensor_mm sensor_passive_mm check <<<"$row"
 echo "summary: markers $markers frames $frames rate $rate occluded $occluded chosen $chosen bonds $bonds accepted $accepted rejected $rejected occluded seen $seen span $span s check $check"
 [ "$markers" = 25 ] && [ "$frames" = 480 ] && [ "$rate" = 240 ]
 [ "$occluded" = "$gaps" ] || { echo "FAIL: convert counted $occluded gaps, the text has $gaps"; exit 1; }
@@ -45,6 +45,14 @@ echo "summary: markers $markers frames $frames rate $rate occluded $occluded cho
 [ "$seen" = "$gaps" ] || { echo "FAIL: ~stats counted $seen occluded samples, the piece has $gaps"; exit 1; }
 [ "$rejected" = 0 ] || { echo "FAIL: $rejected frames rejected"; exit 1; }
 [ "$bonds" -gt 0 ] || { echo "FAIL: no bond chosen"; exit 1; }
+# Sensor muscles were fitted and judged (written or not, by identify's own check).
+[[ "$muscles" =~ ^[0-9]+$ ]] && [[ "$sensor_mm" =~ ^[0-9.]+$ ]] && [[ "$sensor_passive_mm" =~ ^[0-9.]+$ ]] ||
+  { echo "FAIL: no sensor-muscle figures ($muscles, $sensor_mm, $sensor_passive_mm)"; exit 1; }
+if [ "$muscles" -gt 0 ]; then
+  awk -v m="$sensor_mm" -v p="$sensor_passive_mm" 'BEGIN { exit !(m < p) }' ||
+    { echo "FAIL: sensor muscles written although $sensor_mm mm >= passive $sensor_passive_mm mm"; exit 1; }
+  [ "$(grep -c "kind: muscle" "$tmp/work/sample26_piece.yaml")" -eq "$muscles" ]
+fi
 # 480 frames at 240 Hz: 479 intervals take 2.0 s at the capture's rate.
 awk -v s="$span" 'BEGIN { exit !(s >= 1.98 && s < 30) }' || { echo "FAIL: replayed in $span s"; exit 1; }
 [ "$check" = ok ]
