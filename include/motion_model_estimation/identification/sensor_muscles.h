@@ -45,7 +45,7 @@ struct SensorMuscleOptions {
   int sensors = 16;          ///< sensor bonds every muscle reads (1..kMaxMuscleInputs)
   int neighbours = 4;        ///< muscles from each particle to its nearest particles (0..)
   /// Candidate ridges, relative to the mean diagonal of the normal matrix (scaled columns).
-  std::vector<double> ridges = {1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0};
+  std::vector<double> ridges = {1e-4, 1e-3, 1e-2, 1e-1, 0.3, 1.0, 3.0, 10.0};
   double validation_fraction = 0.2;  ///< last share of the frames that chooses the ridge
   int horizon_frames = 10;           ///< the validation's open-loop horizon
   double gain_margin = 10.0;         ///< gain = margin x the largest linear activation [1]
