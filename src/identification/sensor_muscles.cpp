@@ -96,7 +96,7 @@ class Fitter {
 
   int unknowns() const { return m_ * k_; }
 
-  /// Adds the rows of frames t in [t_begin, t_end) (each needs t-1 and t+1 inside the data).
+  /// Adds the rows of frames t >= t_begin whose frames t-1, t, t+1 all lie before t_end.
   void accumulate(int t_begin, int t_end, System* sys) {
     if (sys->ata.rows() == 0) {
       sys->ata = Eigen::MatrixXd::Zero(unknowns(), unknowns());
@@ -106,7 +106,7 @@ class Fitter {
     std::vector<Eigen::Matrix<double, Eigen::Dynamic, 1>> phi(m_);
     std::vector<Eigen::Vector3d> u(m_);
     std::vector<char> muscle_ok(m_);
-    for (int t = std::max(1, t_begin); t < std::min(t_end, data_.numFrames() - 1); ++t) {
+    for (int t = std::max(1, t_begin); t + 1 < std::min(t_end, data_.numFrames()); ++t) {
       Eigen::VectorXd z;
       if (!sensorInputs(t, &z)) continue;
       const State state = stateAt(t);
@@ -146,7 +146,7 @@ class Fitter {
     const double mean_diagonal = std::max(sys.ata.diagonal().mean(), 1e-300);
     Eigen::MatrixXd a = sys.ata;
     a.diagonal().array() += ridge * mean_diagonal;
-    Eigen::LLT<Eigen::MatrixXd> llt(a);
+    Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(a);  // in place: one copy of the matrix
     if (llt.info() != Eigen::Success) return false;
     *theta = llt.solve(sys.atb);
     return theta->allFinite();
@@ -351,6 +351,10 @@ class Fitter {
   std::vector<double> e_scale_, s_scale_;
 };
 
+/// Unknowns at most: the normal matrix and its factor are two dense squares of this size
+/// (2 x 1.6 GB at 14000).
+constexpr size_t kMaxUnknowns = 14000;
+
 Layout chooseLayout(const Model& passive, const Trajectory& data, const SensorMuscleOptions& o) {
   const std::vector<PairStats> pairs = pairStatistics(passive, data);
   const int well_seen = static_cast<int>(std::ceil(o.min_seen_share * data.numFrames()));
@@ -443,6 +447,12 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
     throw InputError("sensor muscles: no pair of particles is seen together in " +
                      std::to_string(static_cast<int>(100 * o.min_seen_share)) + " % of the frames");
   if (layout.muscles.empty()) throw InputError("sensor muscles: no pair of particles to put a muscle on");
+  const size_t unknowns = layout.muscles.size() * (2 * layout.sensors.size() + 3);
+  if (unknowns > kMaxUnknowns)
+    throw InputError("sensor muscles: " + std::to_string(layout.muscles.size()) + " muscles reading " +
+                     std::to_string(layout.sensors.size()) + " sensors are " + std::to_string(unknowns) +
+                     " unknowns, more than " + std::to_string(kMaxUnknowns) +
+                     " (two dense matrices of that size): fewer sensors or neighbours");
   Fitter fitter(passive, data, layout);
   SensorMuscleResult result;
   result.sensors = static_cast<int>(layout.sensors.size());
@@ -457,7 +467,7 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
 
   // The ridge: fitted on the frames before validation_start, judged on the rest.
   System sys;
-  fitter.accumulate(1, validation_start, &sys);
+  fitter.accumulate(1, validation_start, &sys);  // rows t <= validation_start - 2
   if (sys.rows == 0) throw InputError("sensor muscles: no frame gives an equation (gaps everywhere)");
   const std::vector<int> horizons = {o.horizon_frames};
   auto judge = [&](const Model& model, double* rms, double* cv, bool* bounded) {
@@ -508,7 +518,7 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   result.better_than_passive = best_bounded && best_rms < result.passive_rms_m;
 
   // The chosen ridge on every frame.
-  fitter.accumulate(validation_start, frames, &sys);
+  fitter.accumulate(validation_start - 1, frames, &sys);
   Eigen::VectorXd theta;
   if (!Fitter::solve(sys, result.ridge, &theta))
     throw InputError("sensor muscles: the final solve failed");

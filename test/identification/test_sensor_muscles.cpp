@@ -44,7 +44,6 @@ mme::SensorMuscleOptions smallOptions() {
   mme::SensorMuscleOptions o;
   o.sensors = 6;  // every pair of this 4-particle object
   o.neighbours = 3;
-  o.progress = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
   return o;
 }
 
@@ -54,8 +53,10 @@ TEST(SensorMuscles, LearnTheControllerThePassiveModelLacks) {
   const Model truth = linearMuscleObject();
   const mme::Trajectory data = mme::simulateTrajectory(truth, kFrames, truth.frame_rate_hz);
   const Model passive = mme::removeMuscles(truth);
+  mme::SensorMuscleOptions shown = smallOptions();
+  shown.progress = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
   const mme::SensorMuscleResult r =
-      mme::addSensorMuscles(passive, mme::sliceFrames(data, 0, kFitted), smallOptions());
+      mme::addSensorMuscles(passive, mme::sliceFrames(data, 0, kFitted), shown);
   EXPECT_EQ(r.sensors, 6);
   EXPECT_GT(r.muscles, 4);
   EXPECT_EQ(r.unknowns, static_cast<size_t>(r.muscles * (2 * 6 + 3)));
@@ -144,6 +145,17 @@ TEST(SensorMuscles, BadInputGetsClearErrors) {
   k.free = true;
   k.has_value = false;
   EXPECT_NE(message(unvalued, data, smallOptions()).find("has no value"), std::string::npos);
+  // Too many unknowns for the dense normal equations: refused before anything is allocated.
+  Model crowd;
+  crowd.frame_rate_hz = 100;
+  for (int i = 0; i < 60; ++i)
+    mme::test::addParticle(&crowd, Eigen::Vector3d(0.1 * (i % 8), 0.1 * (i / 8), 0.02 * (i % 3)));
+  const mme::Trajectory crowd_data = mme::simulateTrajectory(crowd, 80, crowd.frame_rate_hz);
+  o = smallOptions();
+  o.sensors = 16;
+  o.neighbours = 59;
+  const std::string crowded = message(crowd, crowd_data, o);
+  EXPECT_NE(crowded.find("unknowns, more than 14000"), std::string::npos) << crowded;
   mme::Trajectory renamed = data;
   renamed.marker_names[1] = "elsewhere";
   EXPECT_NE(message(passive, renamed, smallOptions()).find("'elsewhere'"), std::string::npos);
