@@ -3,6 +3,7 @@
 #include <stdexcept>
 #include <string>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <sstream>
@@ -42,6 +43,22 @@ bool observedBounds(const Trajectory& trajectory, Eigen::Vector3d* min_m, Eigen:
     *max_m = hi;
   }
   return any;
+}
+
+MarkerDistance markerDistance(const Trajectory& trajectory, int a, int b) {
+  MarkerDistance d;
+  double sum = 0.0, sum2 = 0.0;
+  for (int t = 0; t < trajectory.numFrames(); ++t) {
+    if (trajectory.isOccluded(t, a) || trajectory.isOccluded(t, b)) continue;
+    const double l = (trajectory.position(t, b) - trajectory.position(t, a)).norm();
+    sum += l;
+    sum2 += l * l;
+    ++d.seen_frames;
+  }
+  if (d.seen_frames == 0) return d;
+  d.mean_m = sum / d.seen_frames;
+  d.std_m = std::sqrt(std::max(0.0, sum2 / d.seen_frames - d.mean_m * d.mean_m));
+  return d;
 }
 
 std::string Trajectory::validate() const {

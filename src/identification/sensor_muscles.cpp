@@ -34,23 +34,9 @@ std::vector<PairStats> pairStatistics(const Model& model, const Trajectory& data
   for (int a = 0; a < n; ++a)
     for (int b = a + 1; b < n; ++b) {
       if (model.particles[a].fixed && model.particles[b].fixed) continue;
-      double sum = 0.0, sum2 = 0.0;
-      int seen = 0;
-      for (int t = 0; t < data.numFrames(); ++t) {
-        if (data.isOccluded(t, a) || data.isOccluded(t, b)) continue;
-        const double l = (data.position(t, b) - data.position(t, a)).norm();
-        sum += l;
-        sum2 += l * l;
-        ++seen;
-      }
-      if (seen == 0) continue;
-      PairStats p;
-      p.a = a;
-      p.b = b;
-      p.seen = seen;
-      p.mean_m = sum / seen;
-      p.std_m = std::sqrt(std::max(0.0, sum2 / seen - p.mean_m * p.mean_m));
-      pairs.push_back(p);
+      const MarkerDistance d = markerDistance(data, a, b);
+      if (d.seen_frames == 0) continue;
+      pairs.push_back({a, b, d.mean_m, d.std_m, d.seen_frames});
     }
   return pairs;
 }

@@ -45,21 +45,12 @@ std::vector<std::pair<int, int>> candidatePairs(const Model& model, const Trajec
   std::vector<std::vector<PairStats>> stats(n, std::vector<PairStats>(n));
   for (int a = 0; a < n; ++a)
     for (int b = a + 1; b < n; ++b) {
-      double sum = 0.0, sum2 = 0.0;
-      int count = 0;
-      for (int t = 0; t < data.numFrames(); ++t) {
-        if (data.isOccluded(t, a) || data.isOccluded(t, b)) continue;
-        const double d = (data.position(t, a) - data.position(t, b)).norm();
-        sum += d;
-        sum2 += d * d;
-        ++count;
-      }
-      if (count < 3) continue;
+      const MarkerDistance d = markerDistance(data, a, b);
+      if (d.seen_frames < 3) continue;
       PairStats& s = stats[a][b];
       s.seen = true;
-      s.mean_m = sum / count;
-      const double var = std::max(0.0, sum2 / count - s.mean_m * s.mean_m);
-      s.relative_std = s.mean_m > 0.0 ? std::sqrt(var) / s.mean_m : 0.0;
+      s.mean_m = d.mean_m;
+      s.relative_std = s.mean_m > 0.0 ? d.std_m / s.mean_m : 0.0;
       stats[b][a] = s;
     }
   const auto usable = [&](int a, int b) {

@@ -46,6 +46,15 @@ Trajectory sliceFrames(const Trajectory& in, int first, int count);
 /// no sample is observed.
 bool observedBounds(const Trajectory& trajectory, Eigen::Vector3d* min_m, Eigen::Vector3d* max_m);
 
+/// The distance between markers a and b over the frames where both are seen: its mean and
+/// standard deviation [m] and how many frames saw both (0: the statistics are 0).
+struct MarkerDistance {
+  double mean_m = 0.0;
+  double std_m = 0.0;
+  int seen_frames = 0;
+};
+MarkerDistance markerDistance(const Trajectory& trajectory, int a, int b);
+
 /// Adds independent Gaussian noise of `noise_std_m` [m] to every non-occluded coordinate,
 /// reproducibly from `seed` (own Box-Muller on mt19937_64: same output on every platform).
 void addGaussianNoise(Trajectory* trajectory, double noise_std_m, uint64_t seed);
