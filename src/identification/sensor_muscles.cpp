@@ -443,7 +443,7 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   SensorMuscleResult result;
   result.sensors = static_cast<int>(layout.sensors.size());
   result.muscles = static_cast<int>(layout.muscles.size());
-  result.unknowns = static_cast<size_t>(fitter.unknowns());
+  result.unknowns = unknowns;
   {
     char line[200];
     std::snprintf(line, sizeof(line), "sensor muscles: %d sensors, %d muscles, %zu unknowns",
@@ -462,10 +462,9 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
       if (row.predictor == Predictor::kModel) *rms = row.rms_m;
       if (row.predictor == Predictor::kConstantVelocity && cv) *cv = row.rms_m;
     }
-    *bounded = report.rollout_bounded;
+    if (bounded) *bounded = report.rollout_bounded;
   };
-  bool passive_bounded = false;
-  judge(passive, &result.passive_rms_m, &result.constant_velocity_rms_m, &passive_bounded);
+  judge(passive, &result.passive_rms_m, &result.constant_velocity_rms_m, nullptr);
   int best = -1;
   double best_rms = std::numeric_limits<double>::infinity();
   bool best_bounded = false;
@@ -501,6 +500,7 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   }
   if (best < 0) throw InputError("sensor muscles: no candidate ridge gave a model (every solve failed)");
   result.ridge = o.ridges[best];
+  result.validation_rms_m = best_rms;
   result.better_than_passive = best_bounded && best_rms < result.passive_rms_m;
 
   // The chosen ridge on every frame.

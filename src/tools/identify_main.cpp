@@ -1,7 +1,6 @@
 // identify: offline identification of a trajectory file or bag (SPEC section 7).
 #include <unistd.h>
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -242,8 +241,7 @@ int run(int argc, char** argv) {
                   "sensor muscles: %d sensors, %d muscles, ridge %.0e; %d frames ahead on the "
                   "last frames %.3g m (passive %.3g m, constant velocity %.3g m)%s",
                   sm.sensors, sm.muscles, sm.ridge, sensor_options.horizon_frames,
-                  sm.ridge_rms_m[std::find(sensor_options.ridges.begin(), sensor_options.ridges.end(),
-                                           sm.ridge) - sensor_options.ridges.begin()],
+                  sm.validation_rms_m,
                   sm.passive_rms_m, sm.constant_velocity_rms_m,
                   sm.better_than_passive ? "" : ": not better than the passive model, which is kept");
     std::printf("identify: %s\n", line);

@@ -5,6 +5,7 @@
 // its file, and that bad options get clear errors.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "motion_model_estimation/core/error.h"
@@ -62,6 +63,11 @@ TEST(SensorMuscles, LearnTheControllerThePassiveModelLacks) {
   EXPECT_EQ(r.unknowns, static_cast<size_t>(r.muscles * (2 * 6 + 3)));
   EXPECT_TRUE(r.better_than_passive);
   ASSERT_EQ(r.ridge_rms_m.size(), smallOptions().ridges.size());
+  const std::vector<double> ridges = smallOptions().ridges;
+  const size_t chosen = std::find(ridges.begin(), ridges.end(), r.ridge) - ridges.begin();
+  ASSERT_LT(chosen, ridges.size());
+  EXPECT_EQ(r.validation_rms_m, r.ridge_rms_m[chosen]);
+  EXPECT_LT(r.validation_rms_m, r.passive_rms_m);
   bool bounded = false;
   const double muscles_rms = heldOutRms(r.model, data, &bounded);
   const double passive_rms = heldOutRms(passive, data);

@@ -61,6 +61,7 @@ struct SensorMuscleResult {
   size_t unknowns = 0;        ///< linear unknowns (muscles x (2 sensors + 3))
   size_t rows = 0;            ///< equations of the final fit (3 per particle and frame)
   double ridge = 0.0;         ///< the chosen relative ridge
+  double validation_rms_m = 0.0;         ///< its validation RMS horizon ahead
   std::vector<double> ridge_rms_m;       ///< per candidate: validation RMS horizon ahead (NaN: failed)
   std::vector<int> ridge_bounded;        ///< per candidate: its validation rollout bounded
   double passive_rms_m = 0.0;            ///< the passive model on the same validation frames
