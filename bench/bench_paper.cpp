@@ -823,40 +823,40 @@ void figure5(const Settings& s) {
         parameters = mme::freeParameters(dampers_fit).size() + sr.unknowns;
         cost_m2 = sr.residual_rms_m * sr.residual_rms_m;
       } else {
-      Model start;
-      if (v != "muscles") {
-        start = dampingVariant(mme::removeMuscles(c.structure), v == "dampers");
-      } else if (own_muscles) {
-        start = forgetFreeValues(c.structure);
-      } else {
-        start = mme::addMuscles(dampers_fit, &fit, mme::MusclePlacement{});
-        if (mme::muscleTypeCount(start) == 0) {
-          std::printf("fig5: %s: no spring type to turn into a muscle (the chosen structure has "
-                      "none)\n", c.name.c_str());
-          continue;
+        Model start;
+        if (v != "muscles") {
+          start = dampingVariant(mme::removeMuscles(c.structure), v == "dampers");
+        } else if (own_muscles) {
+          start = forgetFreeValues(c.structure);
+        } else {
+          start = mme::addMuscles(dampers_fit, &fit, mme::MusclePlacement{});
+          if (mme::muscleTypeCount(start) == 0) {
+            std::printf("fig5: %s: no spring type to turn into a muscle (the chosen structure has "
+                        "none)\n", c.name.c_str());
+            continue;
+          }
         }
-      }
-      const int offset = v == "muscles" && !own_muscles ? dampers_generations : 0;
-      auto log = [&](const mme::Progress& p) {
-        if (!p.message.empty()) return;
-        // Placed muscles continue from the dampers' fit: on the chart, after its generations.
-        const int chart = p.generation + offset;
-        std::fprintf(f, "%s,%s,%d,%d,%llu,%.6f,%.3f\n", c.name.c_str(), variant, p.generation,
-                     chart, static_cast<unsigned long long>(p.evaluations),
-                     std::log10(std::max(p.best_cost, 1e-300)), p.wall_time_s);
-      };
-      const mme::IdentifyResult r = mme::identifyModel(start, fit, o, log);
-      std::fflush(f);
-      fitted = start;
-      mme::setValues(fitted, r.parameters, r.values);
-      if (v == "dampers") {
-        dampers_fit = fitted;
-        dampers_generations = r.generations;
-      }
-      parameters = r.parameters.size();
-      cost_m2 = r.global_cost;
-      wall_s = r.wall_time_s;
-      generations_run = r.generations;
+        const int offset = v == "muscles" && !own_muscles ? dampers_generations : 0;
+        auto log = [&](const mme::Progress& p) {
+          if (!p.message.empty()) return;
+          // Placed muscles continue from the dampers' fit: on the chart, after its generations.
+          const int chart = p.generation + offset;
+          std::fprintf(f, "%s,%s,%d,%d,%llu,%.6f,%.3f\n", c.name.c_str(), variant, p.generation,
+                       chart, static_cast<unsigned long long>(p.evaluations),
+                       std::log10(std::max(p.best_cost, 1e-300)), p.wall_time_s);
+        };
+        const mme::IdentifyResult r = mme::identifyModel(start, fit, o, log);
+        std::fflush(f);
+        fitted = start;
+        mme::setValues(fitted, r.parameters, r.values);
+        if (v == "dampers") {
+          dampers_fit = fitted;
+          dampers_generations = r.generations;
+        }
+        parameters = r.parameters.size();
+        cost_m2 = r.global_cost;
+        wall_s = r.wall_time_s;
+        generations_run = r.generations;
       }
       double rms[4] = {NAN, NAN, NAN, NAN};
       bool bounded = false;
