@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <limits>
 #include <set>
 #include <string>
@@ -56,8 +57,9 @@ struct System {
 
 class Fitter {
  public:
-  Fitter(const Model& passive, const Trajectory& data, const Layout& layout)
+  Fitter(const Model& passive, const Trajectory& data, const Layout& layout, bool nonnegative_own_spring)
       : passive_(passive), data_(data), layout_(layout), sim_(passive),
+        own_spring_nonnegative_(nonnegative_own_spring),
         n_(static_cast<int>(passive.particles.size())),
         s_(static_cast<int>(layout.sensors.size())),
         m_(static_cast<int>(layout.muscles.size())), k_(2 * s_ + 3) {
@@ -82,60 +84,85 @@ class Fitter {
 
   int unknowns() const { return m_ * k_; }
 
-  /// Adds the rows of frames t >= t_begin whose frames t-1, t, t+1 all lie before t_end.
-  void accumulate(int t_begin, int t_end, System* sys) {
+  /// Adds the equations whose window's centre t lies in [centre_begin, centre_end) and whose
+  /// window (frames t - window .. t + window) lies inside the data: per particle, the one-step
+  /// equations of frames t - window + 1 .. t + window - 1 summed with triangle weights
+  /// window - |j| (see the header).
+  void accumulate(int window, int centre_begin, int centre_end, System* sys) {
     if (sys->ata.rows() == 0) {
       sys->ata = Eigen::MatrixXd::Zero(unknowns(), unknowns());
       sys->atb = Eigen::VectorXd::Zero(unknowns());
     }
-    std::vector<Eigen::Vector3d> forces;
-    std::vector<Eigen::Matrix<double, Eigen::Dynamic, 1>> phi(m_);
-    std::vector<Eigen::Vector3d> u(m_);
-    std::vector<char> muscle_ok(m_);
-    for (int t = std::max(1, t_begin); t + 1 < std::min(t_end, data_.numFrames()); ++t) {
-      Eigen::VectorXd z;
-      if (!sensorInputs(t, &z)) continue;
-      const State state = stateAt(t);
-      sim_.computeForces(state, &forces);
-      for (int m = 0; m < m_; ++m) {
-        double e = 0.0, s = 0.0;
-        muscle_ok[m] = muscleGeometry(t, m, state, &u[m], &e, &s);
-        if (!muscle_ok[m]) continue;
-        phi[m].resize(k_);
-        phi[m].head(2 * s_) = z.cwiseQuotient(z_scale_);
-        phi[m](2 * s_) = 1.0;
-        phi[m](2 * s_ + 1) = e / e_scale_[m];
-        phi[m](2 * s_ + 2) = s / s_scale_[m];
+    const int first = std::max(window, centre_begin);
+    const int last = std::min(centre_end, data_.numFrames() - window);  // exclusive
+    if (first >= last) return;
+    // The one-step pieces of frames t - window + 1 .. t + window - 1, oldest first.
+    std::deque<FramePieces> ring;
+    std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>> g(m_);
+    for (int t = first; t < last; ++t) {
+      if (ring.empty()) {
+        for (int f = t - window + 1; f <= t + window - 1; ++f) ring.push_back(pieces(f));
+      } else {
+        ring.pop_front();
+        ring.push_back(pieces(t + window - 1));
       }
       for (int i = 0; i < n_; ++i) {
-        if (!usable(t, i, muscle_ok)) continue;
+        bool ok = true;
+        for (const FramePieces& f : ring) ok = ok && f.particle_ok[i];
+        if (!ok) continue;
         const double mass = passive_.particles[i].mass_kg;
-        const Eigen::Vector3d acc =
-            (data_.position(t + 1, i) - 2.0 * data_.position(t, i) + data_.position(t - 1, i)) / (h_ * h_);
-        const Eigen::Vector3d y = acc - forces[i] / mass;
+        Eigen::Vector3d y = Eigen::Vector3d::Zero();
+        for (const auto& [m, sign] : at_[i]) g[m].setZero(3, k_);
+        for (int j = 0; j < 2 * window - 1; ++j) {
+          const FramePieces& f = ring[j];
+          const double w = window - std::abs(j - (window - 1));
+          y += w * f.y[i];
+          for (const auto& [m, sign] : at_[i]) g[m].noalias() += (w * sign / mass) * f.u[m] * f.phi.col(m).transpose();
+        }
         sys->btb += y.squaredNorm();
         sys->rows += 3;
         for (const auto& [m, sign] : at_[i]) {
-          const double w = sign / mass;
-          sys->atb.segment(m * k_, k_) += (w * u[m].dot(y)) * phi[m];
-          for (const auto& [m2, sign2] : at_[i]) {
-            const double c = w * sign2 / mass * u[m].dot(u[m2]);
-            sys->ata.block(m * k_, m2 * k_, k_, k_).noalias() += c * phi[m] * phi[m2].transpose();
-          }
+          sys->atb.segment(m * k_, k_).noalias() += g[m].transpose() * y;
+          for (const auto& [m2, sign2] : at_[i])
+            sys->ata.block(m * k_, m2 * k_, k_, k_).noalias() += g[m].transpose() * g[m2];
         }
       }
     }
   }
 
-  /// theta for a relative ridge; false when the solve fails.
-  static bool solve(const System& sys, double ridge, Eigen::VectorXd* theta) {
+  /// theta for a relative ridge, every muscle's own stiffness and damping >= 0 (when
+  /// own_spring_nonnegative_); false when a solve fails. The signs by an active set that only
+  /// grows: a negative stiffness or damping is held at 0 and the rest solved again, until none
+  /// is negative (at most kMaxClampRounds solves; what is still negative then is set to 0).
+  bool solve(const System& sys, double ridge, Eigen::VectorXd* theta) const {
+    constexpr int kMaxClampRounds = 6;
     const double mean_diagonal = std::max(sys.ata.diagonal().mean(), 1e-300);
-    Eigen::MatrixXd a = sys.ata;
-    a.diagonal().array() += ridge * mean_diagonal;
-    Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(a);  // in place: one copy of the matrix
-    if (llt.info() != Eigen::Success) return false;
-    *theta = llt.solve(sys.atb);
-    return theta->allFinite();
+    std::vector<int> clamped;
+    for (int round = 0;; ++round) {
+      Eigen::MatrixXd a = sys.ata;
+      a.diagonal().array() += ridge * mean_diagonal;
+      Eigen::VectorXd b = sys.atb;
+      for (int j : clamped) {
+        a.row(j).setZero();
+        a.col(j).setZero();
+        a(j, j) = 1.0;
+        b(j) = 0.0;
+      }
+      Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(a);  // in place: one copy of the matrix
+      if (llt.info() != Eigen::Success) return false;
+      *theta = llt.solve(b);
+      if (!theta->allFinite()) return false;
+      if (!own_spring_nonnegative_) return true;
+      bool changed = false;
+      for (int m = 0; m < m_; ++m)
+        for (int j = m * k_ + 2 * s_ + 1; j <= m * k_ + 2 * s_ + 2; ++j)
+          if ((*theta)(j) < 0.0) {
+            if (round + 1 < kMaxClampRounds) clamped.push_back(j);
+            else (*theta)(j) = 0.0;
+            changed = true;
+          }
+      if (!changed || round + 1 >= kMaxClampRounds) return true;
+    }
   }
 
   /// RMS of a system's rows at theta [m/s^2].
@@ -223,6 +250,47 @@ class Fitter {
   }
 
  private:
+  /// One frame's one-step equations: per particle, usable (see usable()) and a - F_passive / m
+  /// from the frame differences; per muscle, its ends seen, its unit vector and its scaled
+  /// regressors (the sensor inputs, 1, its elongation and speed).
+  struct FramePieces {
+    std::vector<char> particle_ok, muscle_ok;
+    std::vector<Eigen::Vector3d> y, u;
+    Eigen::MatrixXd phi;  // k x muscles
+  };
+
+  FramePieces pieces(int t) {
+    FramePieces f;
+    f.particle_ok.assign(n_, 0);
+    f.muscle_ok.assign(m_, 0);
+    f.y.assign(n_, Eigen::Vector3d::Zero());
+    f.u.assign(m_, Eigen::Vector3d::Zero());
+    f.phi = Eigen::MatrixXd::Zero(k_, m_);
+    Eigen::VectorXd z;
+    if (t < 1 || t + 1 >= data_.numFrames() || !sensorInputs(t, &z)) return f;
+    const State state = stateAt(t);
+    std::vector<Eigen::Vector3d> forces;
+    sim_.computeForces(state, &forces);
+    const Eigen::VectorXd scaled = z.cwiseQuotient(z_scale_);
+    for (int m = 0; m < m_; ++m) {
+      double e = 0.0, s = 0.0;
+      f.muscle_ok[m] = muscleGeometry(t, m, state, &f.u[m], &e, &s);
+      if (!f.muscle_ok[m]) continue;
+      f.phi.col(m).head(2 * s_) = scaled;
+      f.phi(2 * s_, m) = 1.0;
+      f.phi(2 * s_ + 1, m) = e / e_scale_[m];
+      f.phi(2 * s_ + 2, m) = s / s_scale_[m];
+    }
+    for (int i = 0; i < n_; ++i) {
+      if (!usable(t, i, f.muscle_ok)) continue;
+      f.particle_ok[i] = 1;
+      const Eigen::Vector3d acc =
+          (data_.position(t + 1, i) - 2.0 * data_.position(t, i) + data_.position(t - 1, i)) / (h_ * h_);
+      f.y[i] = acc - forces[i] / passive_.particles[i].mass_kg;
+    }
+    return f;
+  }
+
   bool seen(int t, int i) const { return t >= 0 && t < data_.numFrames() && !data_.isOccluded(t, i); }
 
   /// Positions at t and velocities (x(t) - x(t-1)) / h where seen; zeros elsewhere.
@@ -328,6 +396,7 @@ class Fitter {
   const Trajectory& data_;
   const Layout& layout_;
   Simulator sim_;
+  bool own_spring_nonnegative_;  ///< see solve()
   int n_, s_, m_, k_;
   double h_ = 0.0;
   std::vector<std::vector<int>> partners_;
@@ -395,6 +464,9 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
                      ", got " + std::to_string(o.sensors));
   if (o.neighbours < 0 || o.neighbours > 64)
     throw InputError("sensor muscles: neighbours must be 0..64, got " + std::to_string(o.neighbours));
+  if (o.windows_frames.empty()) throw InputError("sensor muscles: no candidate window");
+  for (int w : o.windows_frames)
+    if (w < 1 || w > 100) throw InputError("sensor muscles: every window must be 1..100 frames, got " + std::to_string(w));
   if (o.ridges.empty())
     throw InputError("sensor muscles: no candidate ridge");
   for (double r : o.ridges)
@@ -439,7 +511,7 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
                      std::to_string(layout.sensors.size()) + " sensors are " + std::to_string(unknowns) +
                      " unknowns, more than " + std::to_string(kMaxUnknowns) +
                      " (two dense matrices of that size): fewer sensors or neighbours");
-  Fitter fitter(passive, data, layout);
+  Fitter fitter(passive, data, layout, o.nonnegative_own_spring);
   SensorMuscleResult result;
   result.sensors = static_cast<int>(layout.sensors.size());
   result.muscles = static_cast<int>(layout.muscles.size());
@@ -451,10 +523,8 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
     say(line);
   }
 
-  // The ridge: fitted on the frames before validation_start, judged on the rest.
-  System sys;
-  fitter.accumulate(1, validation_start, &sys);  // rows t <= validation_start - 2
-  if (sys.rows == 0) throw InputError("sensor muscles: no frame gives an equation (gaps everywhere)");
+  // The window and the ridge: fitted on the frames before validation_start (every window's
+  // frames before it), judged on the rest.
   const std::vector<int> horizons = {o.horizon_frames};
   auto judge = [&](const Model& model, double* rms, double* cv, bool* bounded) {
     const PredictionReport report = evaluatePredictions(model, data, horizons, 10.0, validation_start);
@@ -466,50 +536,63 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   };
   judge(passive, &result.passive_rms_m, &result.constant_velocity_rms_m, nullptr);
   int best = -1;
-  double best_rms = std::numeric_limits<double>::infinity();
-  bool best_bounded = false;
-  for (double ridge : o.ridges) {
-    Eigen::VectorXd theta;
-    double rms = std::nan("");
-    bool bounded = false;
-    if (Fitter::solve(sys, ridge, &theta)) {
-      try {
-        judge(fitter.build(theta, o.gain_margin, validation_start), &rms, nullptr, &bounded);
-      } catch (const InputError&) {
-        rms = std::nan("");
+  bool any_rows = false;
+  for (int window : o.windows_frames) {
+    System sys;
+    fitter.accumulate(window, 0, validation_start - window, &sys);
+    if (sys.rows == 0) continue;
+    any_rows = true;
+    for (double ridge : o.ridges) {
+      SensorMuscleCandidate c;
+      c.window_frames = window;
+      c.ridge = ridge;
+      Eigen::VectorXd theta;
+      if (fitter.solve(sys, ridge, &theta)) {
+        try {
+          judge(fitter.build(theta, o.gain_margin, validation_start), &c.validation_rms_m, nullptr, &c.bounded);
+        } catch (const InputError&) {
+          c.validation_rms_m = std::nan("");
+        }
       }
-    }
-    if (!std::isfinite(rms)) bounded = false;
-    result.ridge_rms_m.push_back(rms);
-    result.ridge_bounded.push_back(bounded ? 1 : 0);
-    char line[200];
-    std::snprintf(line, sizeof(line), "sensor muscles: ridge %.0e: %d frames ahead on the last %d "
-                  "frames %.2f mm (passive %.2f mm, constant velocity %.2f mm), rollout %s",
-                  ridge, o.horizon_frames, frames - validation_start, 1e3 * rms,
-                  1e3 * result.passive_rms_m, 1e3 * result.constant_velocity_rms_m,
-                  bounded ? "bounded" : "unbounded");
-    say(line);
-    // Bounded candidates first, then the lowest error.
-    const bool better = std::isfinite(rms) &&
-                        (best < 0 || (bounded && !best_bounded) || (bounded == best_bounded && rms < best_rms));
-    if (better) {
-      best = static_cast<int>(result.ridge_rms_m.size()) - 1;
-      best_rms = rms;
-      best_bounded = bounded;
+      if (!std::isfinite(c.validation_rms_m)) c.bounded = false;
+      char line[240];
+      std::snprintf(line, sizeof(line), "sensor muscles: window %d, ridge %.0e: %d frames ahead on "
+                    "the last %d frames %.2f mm (passive %.2f mm, constant velocity %.2f mm), rollout %s",
+                    window, ridge, o.horizon_frames, frames - validation_start, 1e3 * c.validation_rms_m,
+                    1e3 * result.passive_rms_m, 1e3 * result.constant_velocity_rms_m,
+                    c.bounded ? "bounded" : "unbounded");
+      say(line);
+      result.candidates.push_back(c);
+      // Bounded candidates first, then the lowest error.
+      const SensorMuscleCandidate* b = best < 0 ? nullptr : &result.candidates[best];
+      const bool better = std::isfinite(c.validation_rms_m) &&
+                          (!b || (c.bounded && !b->bounded) ||
+                           (c.bounded == b->bounded && c.validation_rms_m < b->validation_rms_m));
+      if (better) best = static_cast<int>(result.candidates.size()) - 1;
     }
   }
-  if (best < 0) throw InputError("sensor muscles: no candidate ridge gave a model (every solve failed)");
-  result.ridge = o.ridges[best];
-  result.validation_rms_m = best_rms;
-  result.better_than_passive = best_bounded && best_rms < result.passive_rms_m;
+  if (!any_rows)
+    throw InputError("sensor muscles: no frame gives an equation before the validation frames "
+                     "(too short, or gaps everywhere)");
+  if (best < 0) throw InputError("sensor muscles: no candidate gave a model (every solve failed)");
+  const SensorMuscleCandidate chosen = result.candidates[best];
+  result.chosen = best;
+  result.window_frames = chosen.window_frames;
+  result.ridge = chosen.ridge;
+  result.validation_rms_m = chosen.validation_rms_m;
+  result.better_than_passive = chosen.bounded && chosen.validation_rms_m < result.passive_rms_m;
 
-  // The chosen ridge on every frame.
-  fitter.accumulate(validation_start - 1, frames, &sys);
+  // The chosen window and ridge on every frame.
+  System sys;
+  fitter.accumulate(chosen.window_frames, 0, frames, &sys);
   Eigen::VectorXd theta;
-  if (!Fitter::solve(sys, result.ridge, &theta))
+  if (!fitter.solve(sys, result.ridge, &theta))
     throw InputError("sensor muscles: the final solve failed");
   result.rows = sys.rows;
-  result.residual_rms_m = Fitter::residualRms(sys, theta) / (passive.frame_rate_hz * passive.frame_rate_hz);
+  // A row sums window^2 frames' a h^2 (the triangle's weights): per frame, divided by that.
+  const double per_frame = 1.0 / (passive.frame_rate_hz * passive.frame_rate_hz *
+                                  chosen.window_frames * chosen.window_frames);
+  result.residual_rms_m = Fitter::residualRms(sys, theta) * per_frame;
   result.model = fitter.build(theta, o.gain_margin, frames);
   return result;
 }

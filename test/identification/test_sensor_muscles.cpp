@@ -62,11 +62,20 @@ TEST(SensorMuscles, LearnTheControllerThePassiveModelLacks) {
   EXPECT_GT(r.muscles, 4);
   EXPECT_EQ(r.unknowns, static_cast<size_t>(r.muscles * (2 * 6 + 3)));
   EXPECT_TRUE(r.better_than_passive);
-  ASSERT_EQ(r.ridge_rms_m.size(), smallOptions().ridges.size());
-  const std::vector<double> ridges = smallOptions().ridges;
-  const size_t chosen = std::find(ridges.begin(), ridges.end(), r.ridge) - ridges.begin();
-  ASSERT_LT(chosen, ridges.size());
-  EXPECT_EQ(r.validation_rms_m, r.ridge_rms_m[chosen]);
+  const mme::SensorMuscleOptions o = smallOptions();
+  ASSERT_EQ(r.candidates.size(), o.windows_frames.size() * o.ridges.size());
+  ASSERT_GE(r.chosen, 0);
+  ASSERT_LT(r.chosen, static_cast<int>(r.candidates.size()));
+  const mme::SensorMuscleCandidate& chosen = r.candidates[r.chosen];
+  EXPECT_EQ(r.validation_rms_m, chosen.validation_rms_m);
+  EXPECT_EQ(r.ridge, chosen.ridge);
+  EXPECT_EQ(r.window_frames, chosen.window_frames);
+  EXPECT_TRUE(chosen.bounded);
+  for (const mme::SensorMuscleCandidate& c : r.candidates) {  // none bounded and better
+    if (c.bounded) {
+      EXPECT_GE(c.validation_rms_m, chosen.validation_rms_m);
+    }
+  }
   EXPECT_LT(r.validation_rms_m, r.passive_rms_m);
   bool bounded = false;
   const double muscles_rms = heldOutRms(r.model, data, &bounded);
@@ -93,6 +102,50 @@ TEST(SensorMuscles, StaySilentWhereNoControllerActed) {
   EXPECT_LT(r.residual_rms_m, 1e-9);
   EXPECT_LT(heldOutRms(r.model, data), 1e-6);
   EXPECT_LT(heldOutRms(passive, data), 1e-9);
+}
+
+/// Each muscle's own stiffness and damping in `model`: how many are negative.
+int negativeOwnSprings(const Model& model) {
+  int negative = 0;
+  for (const mme::BondType& type : model.bond_types) {
+    if (type.kind != mme::BondKind::kMuscle) continue;
+    negative += type.param(mme::kStiffness).value < 0.0;
+    negative += type.param(mme::kDamping).value < 0.0;
+  }
+  return negative;
+}
+
+TEST(SensorMuscles, OwnStiffnessAndDampingStayNonNegative) {
+  // Left free, the least-squares fit gives some muscles a negative stiffness or damping (a
+  // closed loop that can leave the data); by default those are held at 0 and the rest refitted.
+  const Model truth = linearMuscleObject();
+  const mme::Trajectory data = mme::simulateTrajectory(truth, kFrames, truth.frame_rate_hz);
+  const Model passive = mme::removeMuscles(truth);
+  mme::SensorMuscleOptions free_signs = smallOptions();
+  free_signs.nonnegative_own_spring = false;
+  const mme::SensorMuscleResult unconstrained =
+      mme::addSensorMuscles(passive, mme::sliceFrames(data, 0, kFitted), free_signs);
+  ASSERT_GT(negativeOwnSprings(unconstrained.model), 0) << "the case no longer exercises the constraint";
+  const mme::SensorMuscleResult r =
+      mme::addSensorMuscles(passive, mme::sliceFrames(data, 0, kFitted), smallOptions());
+  EXPECT_EQ(negativeOwnSprings(r.model), 0);
+  EXPECT_TRUE(r.better_than_passive);
+  bool bounded = false;
+  EXPECT_LT(heldOutRms(r.model, data, &bounded), 0.2 * heldOutRms(passive, data));
+  EXPECT_TRUE(bounded);
+}
+
+TEST(SensorMuscles, WindowedEquationsLearnTheControllerToo) {
+  // Equations summed over 2 x 3 - 1 frames with triangle weights: the same law, the same fit.
+  const Model truth = linearMuscleObject();
+  const mme::Trajectory data = mme::simulateTrajectory(truth, kFrames, truth.frame_rate_hz);
+  const Model passive = mme::removeMuscles(truth);
+  mme::SensorMuscleOptions o = smallOptions();
+  o.windows_frames = {3};
+  const mme::SensorMuscleResult r = mme::addSensorMuscles(passive, mme::sliceFrames(data, 0, kFitted), o);
+  EXPECT_EQ(r.window_frames, 3);
+  EXPECT_TRUE(r.better_than_passive);
+  EXPECT_LT(heldOutRms(r.model, data), 0.2 * heldOutRms(passive, data));
 }
 
 TEST(SensorMuscles, GapsDropEquationsNotTheFit) {
@@ -141,6 +194,9 @@ TEST(SensorMuscles, BadInputGetsClearErrors) {
   mme::SensorMuscleOptions o = smallOptions();
   o.sensors = 0;
   EXPECT_NE(message(passive, data, o).find("sensors must be 1..16"), std::string::npos);
+  o = smallOptions();
+  o.windows_frames = {1, 0};
+  EXPECT_NE(message(passive, data, o).find("window"), std::string::npos);
   o = smallOptions();
   o.ridges = {1e-3, -1.0};
   EXPECT_NE(message(passive, data, o).find("ridge"), std::string::npos);

@@ -33,6 +33,7 @@
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -44,10 +45,19 @@ namespace mme {
 struct SensorMuscleOptions {
   int sensors = 16;          ///< sensor bonds every muscle reads (1..kMaxMuscleInputs)
   int neighbours = 4;        ///< muscles from each particle to its nearest particles (0..)
+  /// Candidate windows [frames]: each equation sums the one-step equations of 2 window - 1
+  /// frames with triangle weights (see above); 1 is the plain one-step equation. Measured on
+  /// the real recordings (bench_paper fig5's split): 5 and 10 did not predict better than 1
+  /// (motion_capture_walk: 3 to 10 left the 10x rollout unbounded; subject01 34.11 against 34.24
+  /// mm, Sample01 28.88 against 28.68 mm), so the default is 1 alone.
+  std::vector<int> windows_frames = {1};
   /// Candidate ridges, relative to the mean diagonal of the normal matrix (scaled columns).
   std::vector<double> ridges = {1e-4, 1e-3, 1e-2, 1e-1, 0.3, 1.0, 3.0, 10.0};
   double validation_fraction = 0.2;  ///< last share of the frames that chooses the ridge
   int horizon_frames = 10;           ///< the validation's open-loop horizon
+  /// Every muscle's own stiffness and damping >= 0 (a muscle is then a tether with a
+  /// controller: with negative ones the closed loop leaves the data within the 10x rollout).
+  bool nonnegative_own_spring = true;
   double gain_margin = 10.0;         ///< gain = margin x the largest linear activation [1]
   /// A pair is a sensor or a neighbour muscle only when both particles are seen together in at
   /// least this share of the frames.
@@ -55,21 +65,31 @@ struct SensorMuscleOptions {
   std::function<void(const std::string&)> progress;  ///< one line per step (may be empty)
 };
 
+/// One (window, ridge) candidate and how it predicted the validation frames.
+struct SensorMuscleCandidate {
+  int window_frames = 1;
+  double ridge = 0.0;
+  double validation_rms_m = std::numeric_limits<double>::quiet_NaN();  ///< NaN: failed
+  bool bounded = false;  ///< its validation rollout stayed bounded
+};
+
 struct SensorMuscleResult {
   Model model;                ///< the passive model with sensors and fitted muscles
   int sensors = 0, muscles = 0;
   size_t unknowns = 0;        ///< linear unknowns (muscles x (2 sensors + 3))
   size_t rows = 0;            ///< equations of the final fit (3 per particle and frame)
-  double ridge = 0.0;         ///< the chosen relative ridge
+  std::vector<SensorMuscleCandidate> candidates;  ///< windows x ridges, in the options' order
+  int chosen = -1;            ///< the chosen candidate
+  int window_frames = 1;      ///< its window
+  double ridge = 0.0;         ///< its relative ridge
   double validation_rms_m = 0.0;         ///< its validation RMS horizon ahead
-  std::vector<double> ridge_rms_m;       ///< per candidate: validation RMS horizon ahead (NaN: failed)
-  std::vector<int> ridge_bounded;        ///< per candidate: its validation rollout bounded
   double passive_rms_m = 0.0;            ///< the passive model on the same validation frames
   double constant_velocity_rms_m = 0.0;  ///< the constant-velocity guess there
   /// The chosen fit predicted the validation frames better than the passive model, its rollout
   /// bounded; when false, keep the passive model.
   bool better_than_passive = false;
-  double residual_rms_m = 0.0;  ///< the final fit's one-step residual, a h^2 [m]
+  /// The final fit's residual per frame, a h^2 [m] (a window's row divided by window^2).
+  double residual_rms_m = 0.0;
 };
 
 /// Places and fits sensor muscles on `passive` (its values are the passive forces; every
