@@ -41,6 +41,13 @@ Model linearMuscleObject() {
   return m;
 }
 
+/// Data of linearMuscleObject and its passive model (the muscle made a plain spring).
+struct LinearControllerCase {
+  Model truth = linearMuscleObject();
+  mme::Trajectory data = mme::simulateTrajectory(truth, kFrames, truth.frame_rate_hz);
+  Model passive = mme::removeMuscles(truth);
+};
+
 mme::SensorMuscleOptions smallOptions() {
   mme::SensorMuscleOptions o;
   o.sensors = 6;  // every pair of this 4-particle object
@@ -51,9 +58,9 @@ mme::SensorMuscleOptions smallOptions() {
 TEST(SensorMuscles, LearnTheControllerThePassiveModelLacks) {
   // The muscle is driven by the elongations and speeds of two other bonds; the passive model
   // (the muscle made a plain spring with the same spring part) moves otherwise.
-  const Model truth = linearMuscleObject();
-  const mme::Trajectory data = mme::simulateTrajectory(truth, kFrames, truth.frame_rate_hz);
-  const Model passive = mme::removeMuscles(truth);
+  const LinearControllerCase setup;
+  const Model& passive = setup.passive;
+  const mme::Trajectory& data = setup.data;
   mme::SensorMuscleOptions shown = smallOptions();
   shown.progress = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
   const mme::SensorMuscleResult r =
@@ -118,9 +125,9 @@ int negativeOwnSprings(const Model& model) {
 TEST(SensorMuscles, OwnStiffnessAndDampingStayNonNegative) {
   // Left free, the least-squares fit gives some muscles a negative stiffness or damping (a
   // closed loop that can leave the data); by default those are held at 0 and the rest refitted.
-  const Model truth = linearMuscleObject();
-  const mme::Trajectory data = mme::simulateTrajectory(truth, kFrames, truth.frame_rate_hz);
-  const Model passive = mme::removeMuscles(truth);
+  const LinearControllerCase setup;
+  const Model& passive = setup.passive;
+  const mme::Trajectory& data = setup.data;
   mme::SensorMuscleOptions free_signs = smallOptions();
   free_signs.nonnegative_own_spring = false;
   const mme::SensorMuscleResult unconstrained =
@@ -137,9 +144,9 @@ TEST(SensorMuscles, OwnStiffnessAndDampingStayNonNegative) {
 
 TEST(SensorMuscles, WindowedEquationsLearnTheControllerToo) {
   // Equations summed over 2 x 3 - 1 frames with triangle weights: the same law, the same fit.
-  const Model truth = linearMuscleObject();
-  const mme::Trajectory data = mme::simulateTrajectory(truth, kFrames, truth.frame_rate_hz);
-  const Model passive = mme::removeMuscles(truth);
+  const LinearControllerCase setup;
+  const Model& passive = setup.passive;
+  const mme::Trajectory& data = setup.data;
   mme::SensorMuscleOptions o = smallOptions();
   o.windows_frames = {3};
   const mme::SensorMuscleResult r = mme::addSensorMuscles(passive, mme::sliceFrames(data, 0, kFitted), o);
@@ -149,9 +156,9 @@ TEST(SensorMuscles, WindowedEquationsLearnTheControllerToo) {
 }
 
 TEST(SensorMuscles, GapsDropEquationsNotTheFit) {
-  const Model truth = linearMuscleObject();
-  mme::Trajectory data = mme::simulateTrajectory(truth, kFrames, truth.frame_rate_hz);
-  const Model passive = mme::removeMuscles(truth);
+  const LinearControllerCase setup;
+  const Model& passive = setup.passive;
+  mme::Trajectory data = setup.data;
   const mme::SensorMuscleResult whole =
       mme::addSensorMuscles(passive, mme::sliceFrames(data, 0, kFitted), smallOptions());
   // Particle 2 hidden in frames 50..69: its rows, its partners' rows and (it is in every sensor
