@@ -537,11 +537,13 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   judge(passive, &result.passive_rms_m, &result.constant_velocity_rms_m, nullptr);
   int best = -1;
   bool any_rows = false;
+  System best_sys;  // the equations of the best candidate's window, to be completed below
   for (int window : o.windows_frames) {
     System sys;
     fitter.accumulate(window, 0, validation_start - window, &sys);
     if (sys.rows == 0) continue;
     any_rows = true;
+    const int window_first = static_cast<int>(result.candidates.size());
     for (double ridge : o.ridges) {
       SensorMuscleCandidate c;
       c.window_frames = window;
@@ -570,6 +572,7 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
                            (c.bounded == b->bounded && c.validation_rms_m < b->validation_rms_m));
       if (better) best = static_cast<int>(result.candidates.size()) - 1;
     }
+    if (best >= window_first) best_sys = std::move(sys);
   }
   if (!any_rows)
     throw InputError("sensor muscles: no frame gives an equation before the validation frames "
@@ -582,9 +585,9 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   result.validation_rms_m = chosen.validation_rms_m;
   result.better_than_passive = chosen.bounded && chosen.validation_rms_m < result.passive_rms_m;
 
-  // The chosen window and ridge on every frame.
-  System sys;
-  fitter.accumulate(chosen.window_frames, 0, frames, &sys);
+  // The chosen window and ridge on every frame: the validation fit's equations plus the rest.
+  System& sys = best_sys;
+  fitter.accumulate(chosen.window_frames, validation_start - chosen.window_frames, frames, &sys);
   Eigen::VectorXd theta;
   if (!fitter.solve(sys, result.ridge, &theta))
     throw InputError("sensor muscles: the final solve failed");
