@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <deque>
+#include <functional>
 #include <limits>
 #include <set>
 #include <string>
@@ -130,13 +131,90 @@ class Fitter {
     }
   }
 
+  /// Adds the equations of the model's own open-loop predictions (Data as Demonstrator,
+  /// Venkatraman et al. 2015): from every `stride`-th start t in [start_begin, start_end) whose
+  /// particles are all seen at t-1 and t, the model carrying theta runs horizon - 1 frames; at
+  /// each predicted frame t + k the equation asks the muscles for the acceleration that takes
+  /// the prediction back to the data at t + k + 1, from the predicted posture and speeds. The
+  /// one-step fit learns where the data go from where the data are; these rows teach it where
+  /// to go from where its own errors take it, which is what a prediction k frames ahead meets.
+  /// Returns the number of starts used.
+  int accumulateRollouts(const Eigen::VectorXd& theta, double margin, int gain_t_end, int horizon,
+                         int stride, double correction_frames, int start_begin, int start_end,
+                         System* sys) const {
+    if (sys->ata.rows() == 0) {
+      sys->ata = Eigen::MatrixXd::Zero(unknowns(), unknowns());
+      sys->atb = Eigen::VectorXd::Zero(unknowns());
+    }
+    const Model model = build(theta, margin, gain_t_end);
+    Simulator sim(model);
+    const int last = std::min(start_end, data_.numFrames() - horizon);  // exclusive
+    int starts = 0;
+    std::vector<Eigen::Vector3d> before, next;
+    std::vector<uint8_t> occluded;
+    State state;
+    for (int t = std::max(start_begin, 1); t < last; t += stride) {
+      bool all_seen = true;
+      for (int i = 0; i < n_ && all_seen; ++i)
+        all_seen = !data_.isOccluded(t, i) && !data_.isOccluded(t - 1, i);
+      if (!all_seen) continue;
+      ++starts;
+      state.x_m.assign(n_, Eigen::Vector3d::Zero());
+      state.v_mps.assign(n_, Eigen::Vector3d::Zero());
+      for (int i = 0; i < n_; ++i) {
+        state.x_m[i] = data_.position(t, i);
+        state.v_mps[i] = passive_.particles[i].fixed ? passive_.particles[i].velocity_mps
+                                                     : Eigen::Vector3d((data_.position(t, i) - data_.position(t - 1, i)) / h_);
+      }
+      for (int k = 1; k < horizon; ++k) {
+        before = state.x_m;
+        sim.stepFrame(&state, h_);
+        bool finite = true;
+        for (const Eigen::Vector3d& x : state.x_m) finite = finite && x.allFinite();
+        if (!finite) break;
+        // The target: the data's acceleration at t + k, plus a correction that would bring the
+        // prediction back to the data with time constant tau (critically damped), not in one
+        // step (a one-step return asks for accelerations of drift / h^2: high-gain feedback).
+        const size_t now = static_cast<size_t>(t + k) * n_;
+        next.resize(n_);
+        occluded.assign(n_, 0);
+        for (int i = 0; i < n_; ++i) {
+          if (data_.occluded[now - n_ + i] || data_.occluded[now + i] || data_.occluded[now + n_ + i]) {
+            occluded[i] = 1;
+            continue;
+          }
+          const Eigen::Vector3d& x0 = data_.positions_m[now - n_ + i];
+          const Eigen::Vector3d& x1 = data_.positions_m[now + i];
+          const Eigen::Vector3d& x2 = data_.positions_m[now + n_ + i];
+          Eigen::Vector3d acc = (x2 - 2.0 * x1 + x0) / (h_ * h_);
+          if (correction_frames > 0.0) {
+            const double tau = correction_frames * h_;
+            acc -= (state.x_m[i] - x1) / (tau * tau) +
+                   (2.0 / tau) * ((state.x_m[i] - before[i]) - (x1 - x0)) / h_;
+          }
+          next[i] = acc * h_ * h_ + 2.0 * state.x_m[i] - before[i];
+        }
+        Frames3 f;
+        f.x[0] = before.data();
+        f.x[1] = state.x_m.data();
+        f.x[2] = next.data();
+        f.occluded[2] = occluded.data();
+        addPieces(pieces(f), sys);
+      }
+    }
+    return starts;
+  }
+
   /// theta for a relative ridge, every muscle's own stiffness and damping >= 0 (when
   /// own_spring_nonnegative_); false when a solve fails. The signs by an active set that only
   /// grows: a negative stiffness or damping is held at 0 and the rest solved again, until none
   /// is negative (at most kMaxClampRounds solves; what is still negative then is set to 0).
-  bool solve(const System& sys, double ridge, Eigen::VectorXd* theta) const {
+  /// The ridge is relative to `reference_diagonal` when > 0 (to keep a ridge's weight when rows
+  /// are added), else to the system's own mean diagonal.
+  bool solve(const System& sys, double ridge, Eigen::VectorXd* theta, double reference_diagonal = 0.0) const {
     constexpr int kMaxClampRounds = 6;
-    const double mean_diagonal = std::max(sys.ata.diagonal().mean(), 1e-300);
+    const double mean_diagonal =
+        reference_diagonal > 0.0 ? reference_diagonal : std::max(sys.ata.diagonal().mean(), 1e-300);
     std::vector<int> clamped;
     for (int round = 0;; ++round) {
       Eigen::MatrixXd a = sys.ata;
@@ -166,6 +244,8 @@ class Fitter {
   }
 
   /// RMS of a system's rows at theta [m/s^2].
+  static double meanDiagonal(const System& sys) { return std::max(sys.ata.diagonal().mean(), 1e-300); }
+
   static double residualRms(const System& sys, const Eigen::VectorXd& theta) {
     if (sys.rows == 0) return 0.0;
     const double r2 = sys.btb - 2.0 * theta.dot(sys.atb) + theta.dot(sys.ata * theta);
@@ -213,7 +293,7 @@ class Fitter {
     std::vector<double> largest(m_, 0.0);
     for (int t = 1; t < std::min(t_end, data_.numFrames()); ++t) {
       Eigen::VectorXd z;
-      if (!sensorInputs(t, &z)) continue;
+      if (!sensorInputs(dataFrames(t), &z)) continue;
       const Eigen::VectorXd scaled = z.cwiseQuotient(z_scale_);
       for (int m = 0; m < m_; ++m) {
         const double y = theta.segment(m * k_, 2 * s_).dot(scaled) + theta(m * k_ + 2 * s_);
@@ -259,22 +339,54 @@ class Fitter {
     Eigen::MatrixXd phi;  // k x muscles
   };
 
-  FramePieces pieces(int t) {
+  /// Three consecutive frames (before, now, after): positions and occlusion flags per particle
+  /// (x[k] null: that frame is outside the data; occluded[k] null: every particle seen).
+  struct Frames3 {
+    const Eigen::Vector3d* x[3] = {nullptr, nullptr, nullptr};
+    const uint8_t* occluded[3] = {nullptr, nullptr, nullptr};
+    bool seen(int k, int i) const { return x[k] && (!occluded[k] || !occluded[k][i]); }
+  };
+
+  /// Frames t-1, t, t+1 of the data.
+  Frames3 dataFrames(int t) const {
+    Frames3 f;
+    const int n = data_.numMarkers();
+    for (int k = 0; k < 3; ++k) {
+      const int frame = t - 1 + k;
+      if (frame < 0 || frame >= data_.numFrames()) continue;
+      f.x[k] = &data_.positions_m[static_cast<size_t>(frame) * n];
+      f.occluded[k] = &data_.occluded[static_cast<size_t>(frame) * n];
+    }
+    return f;
+  }
+
+  FramePieces pieces(int t) const {
+    if (t < 1 || t + 1 >= data_.numFrames()) return emptyPieces();
+    return pieces(dataFrames(t));
+  }
+
+  FramePieces emptyPieces() const {
     FramePieces f;
     f.particle_ok.assign(n_, 0);
     f.muscle_ok.assign(m_, 0);
     f.y.assign(n_, Eigen::Vector3d::Zero());
     f.u.assign(m_, Eigen::Vector3d::Zero());
     f.phi = Eigen::MatrixXd::Zero(k_, m_);
+    return f;
+  }
+
+  /// The one-step equations of the middle frame of `frames` (its acceleration from all three).
+  FramePieces pieces(const Frames3& frames) const {
+    FramePieces f = emptyPieces();
     Eigen::VectorXd z;
-    if (t < 1 || t + 1 >= data_.numFrames() || !sensorInputs(t, &z)) return f;
-    const State state = stateAt(t);
+    if (!sensorInputs(frames, &z)) return f;
+    const State state = stateAt(frames);
     std::vector<Eigen::Vector3d> forces;
     sim_.computeForces(state, &forces);
     const Eigen::VectorXd scaled = z.cwiseQuotient(z_scale_);
     for (int m = 0; m < m_; ++m) {
       double e = 0.0, s = 0.0;
-      f.muscle_ok[m] = muscleGeometry(t, m, state, &f.u[m], &e, &s);
+      f.muscle_ok[m] = muscleGeometry(frames, m, state, &f.u[m], &e, &s);
       if (!f.muscle_ok[m]) continue;
       f.phi.col(m).head(2 * s_) = scaled;
       f.phi(2 * s_, m) = 1.0;
@@ -282,54 +394,69 @@ class Fitter {
       f.phi(2 * s_ + 2, m) = s / s_scale_[m];
     }
     for (int i = 0; i < n_; ++i) {
-      if (!usable(t, i, f.muscle_ok)) continue;
+      if (!usable(frames, i, f.muscle_ok)) continue;
       f.particle_ok[i] = 1;
-      const Eigen::Vector3d acc =
-          (data_.position(t + 1, i) - 2.0 * data_.position(t, i) + data_.position(t - 1, i)) / (h_ * h_);
+      const Eigen::Vector3d acc = (frames.x[2][i] - 2.0 * frames.x[1][i] + frames.x[0][i]) / (h_ * h_);
       f.y[i] = acc - forces[i] / passive_.particles[i].mass_kg;
     }
     return f;
   }
 
-  bool seen(int t, int i) const { return t >= 0 && t < data_.numFrames() && !data_.isOccluded(t, i); }
+  /// Adds one frame's equations (window 1).
+  void addPieces(const FramePieces& f, System* sys) const {
+    for (int i = 0; i < n_; ++i) {
+      if (!f.particle_ok[i]) continue;
+      const double mass = passive_.particles[i].mass_kg;
+      sys->btb += f.y[i].squaredNorm();
+      sys->rows += 3;
+      for (const auto& [m, sign] : at_[i]) {
+        const Eigen::Matrix<double, 3, Eigen::Dynamic> g = (sign / mass) * f.u[m] * f.phi.col(m).transpose();
+        sys->atb.segment(m * k_, k_).noalias() += g.transpose() * f.y[i];
+        for (const auto& [m2, sign2] : at_[i]) {
+          const Eigen::Matrix<double, 3, Eigen::Dynamic> g2 = (sign2 / mass) * f.u[m2] * f.phi.col(m2).transpose();
+          sys->ata.block(m * k_, m2 * k_, k_, k_).noalias() += g.transpose() * g2;
+        }
+      }
+    }
+  }
 
-  /// Positions at t and velocities (x(t) - x(t-1)) / h where seen; zeros elsewhere.
-  State stateAt(int t) const {
+  /// Positions now and velocities (now - before) / h where seen; zeros elsewhere.
+  State stateAt(const Frames3& f) const {
     State s;
     s.x_m.assign(n_, Eigen::Vector3d::Zero());
     s.v_mps.assign(n_, Eigen::Vector3d::Zero());
     for (int i = 0; i < n_; ++i) {
-      if (!seen(t, i)) continue;
-      s.x_m[i] = data_.position(t, i);
-      if (seen(t - 1, i)) s.v_mps[i] = (data_.position(t, i) - data_.position(t - 1, i)) / h_;
+      if (!f.seen(1, i)) continue;
+      s.x_m[i] = f.x[1][i];
+      if (f.seen(0, i)) s.v_mps[i] = (f.x[1][i] - f.x[0][i]) / h_;
     }
     return s;
   }
 
-  /// The 2S network inputs at frame t (elongations from the sensors' rest lengths, then speeds
-  /// along them); false when a sensor's particle is unseen at t or t-1.
-  bool sensorInputs(int t, Eigen::VectorXd* z) const {
+  /// The 2S network inputs now (elongations from the sensors' rest lengths, then speeds along
+  /// them); false when a sensor's particle is unseen now or before.
+  bool sensorInputs(const Frames3& f, Eigen::VectorXd* z) const {
     z->resize(2 * s_);
     for (int s = 0; s < s_; ++s) {
       const PairStats& p = layout_.sensors[s];
-      if (!seen(t, p.a) || !seen(t, p.b) || !seen(t - 1, p.a) || !seen(t - 1, p.b)) return false;
-      const Eigen::Vector3d d = data_.position(t, p.b) - data_.position(t, p.a);
+      if (!f.seen(1, p.a) || !f.seen(1, p.b) || !f.seen(0, p.a) || !f.seen(0, p.b)) return false;
+      const Eigen::Vector3d d = f.x[1][p.b] - f.x[1][p.a];
       const double l = d.norm();
       if (!(l > 0.0)) return false;
       const Eigen::Vector3d u = d / l;
-      const Eigen::Vector3d dv = (data_.position(t, p.b) - data_.position(t - 1, p.b) -
-                                  data_.position(t, p.a) + data_.position(t - 1, p.a)) / h_;
+      const Eigen::Vector3d dv = (f.x[1][p.b] - f.x[0][p.b] - f.x[1][p.a] + f.x[0][p.a]) / h_;
       (*z)(s) = l - p.mean_m;
       (*z)(s_ + s) = dv.dot(u);
     }
     return true;
   }
 
-  /// Unit vector a->b, elongation from the mean length and speed of muscle m at frame t; false
-  /// when an end is unseen at t or t-1.
-  bool muscleGeometry(int t, int m, const State& state, Eigen::Vector3d* u, double* e, double* s) const {
+  /// Unit vector a->b, elongation from the mean length and speed of muscle m now; false when an
+  /// end is unseen now or before.
+  bool muscleGeometry(const Frames3& f, int m, const State& state, Eigen::Vector3d* u, double* e,
+                      double* s) const {
     const PairStats& p = layout_.muscles[m];
-    if (!seen(t, p.a) || !seen(t, p.b) || !seen(t - 1, p.a) || !seen(t - 1, p.b)) return false;
+    if (!f.seen(1, p.a) || !f.seen(1, p.b) || !f.seen(0, p.a) || !f.seen(0, p.b)) return false;
     const Eigen::Vector3d d = state.x_m[p.b] - state.x_m[p.a];
     const double l = d.norm();
     if (!(l > 0.0)) return false;
@@ -339,17 +466,17 @@ class Fitter {
     return true;
   }
 
-  /// Particle i gives an equation at t: seen at t-1, t, t+1, not fixed, its passive partners
-  /// and every muscle at it seen at t-1 and t.
-  bool usable(int t, int i, const std::vector<char>& muscle_ok) const {
+  /// Particle i gives an equation: seen before, now and after, not fixed, its passive partners
+  /// and every muscle at it seen before and now.
+  bool usable(const Frames3& f, int i, const std::vector<char>& muscle_ok) const {
     if (passive_.particles[i].fixed || at_[i].empty()) return false;
-    if (!seen(t - 1, i) || !seen(t, i) || !seen(t + 1, i)) return false;
+    if (!f.seen(0, i) || !f.seen(1, i) || !f.seen(2, i)) return false;
     if (all_partners_) {
       for (int j = 0; j < n_; ++j)
-        if (!seen(t, j) || !seen(t - 1, j)) return false;
+        if (!f.seen(1, j) || !f.seen(0, j)) return false;
     }
     for (int j : partners_[i])
-      if (!seen(t, j) || !seen(t - 1, j)) return false;
+      if (!f.seen(1, j) || !f.seen(0, j)) return false;
     for (const auto& entry : at_[i])
       if (!muscle_ok[entry.first]) return false;
     return true;
@@ -363,16 +490,17 @@ class Fitter {
     std::vector<double> e2(m_, 0.0), s2(m_, 0.0);
     std::vector<int> count(m_, 0);
     for (int t = 1; t < data_.numFrames(); ++t) {
+      const Frames3 f = dataFrames(t);
       Eigen::VectorXd z;
-      if (sensorInputs(t, &z)) {
+      if (sensorInputs(f, &z)) {
         z2 += z.cwiseAbs2();
         ++frames;
       }
-      const State state = stateAt(t);
+      const State state = stateAt(f);
       for (int m = 0; m < m_; ++m) {
         Eigen::Vector3d u;
         double e = 0.0, s = 0.0;
-        if (!muscleGeometry(t, m, state, &u, &e, &s)) continue;
+        if (!muscleGeometry(f, m, state, &u, &e, &s)) continue;
         e2[m] += e * e;
         s2[m] += s * s;
         ++count[m];
@@ -395,7 +523,7 @@ class Fitter {
   const Model& passive_;
   const Trajectory& data_;
   const Layout& layout_;
-  Simulator sim_;
+  mutable Simulator sim_;  // computeForces keeps scratch
   bool own_spring_nonnegative_;  ///< see solve()
   int n_, s_, m_, k_;
   double h_ = 0.0;
@@ -477,6 +605,13 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   if (o.horizon_frames < 1) throw InputError("sensor muscles: the horizon must be >= 1 frame");
   if (!(o.gain_margin >= 1.0) || !std::isfinite(o.gain_margin))
     throw InputError("sensor muscles: the gain margin must be a finite number >= 1");
+  if (o.rollout_rounds < 0 || o.rollout_rounds > 20)
+    throw InputError("sensor muscles: rollout rounds must be 0..20, got " + std::to_string(o.rollout_rounds));
+  if (o.rollout_stride_frames < 1)
+    throw InputError("sensor muscles: the rollout stride must be >= 1 frame, got " +
+                     std::to_string(o.rollout_stride_frames));
+  if (!(o.rollout_correction_frames >= 0.0) || !std::isfinite(o.rollout_correction_frames))
+    throw InputError("sensor muscles: the rollout correction time must be a finite number >= 0 frames");
   if (!(o.min_seen_share >= 0.0 && o.min_seen_share <= 1.0))
     throw InputError("sensor muscles: min_seen_share must be in [0, 1]");
   if (!(passive.frame_rate_hz > 0.0)) throw InputError("sensor muscles: the model has no frame rate");
@@ -578,6 +713,58 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
     throw InputError("sensor muscles: no frame gives an equation before the validation frames "
                      "(too short, or gaps everywhere)");
   if (best < 0) throw InputError("sensor muscles: no candidate gave a model (every solve failed)");
+  // Rollout equations from the best one-step candidate and, when another of its window predicted
+  // the validation frames better but left its rollout unbounded, from that one too (the rollout
+  // equations can bound it): each round a candidate of its own.
+  // The ridge stays relative to the one-step rows' mean diagonal as rollout rows are added.
+  auto runRounds = [&](const System& data_rows, double ridge, int gain_t_end, int start_end, int rounds,
+                       const std::function<void(int, const Eigen::VectorXd&)>& each) {
+    const double reference_diagonal = Fitter::meanDiagonal(data_rows);
+    Eigen::VectorXd theta;
+    if (!fitter.solve(data_rows, ridge, &theta, reference_diagonal)) return false;
+    System all = data_rows;
+    for (int round = 1; round <= rounds; ++round) {
+      fitter.accumulateRollouts(theta, o.gain_margin, gain_t_end, o.horizon_frames,
+                                o.rollout_stride_frames, o.rollout_correction_frames, 1, start_end, &all);
+      if (!fitter.solve(all, ridge, &theta, reference_diagonal)) return false;
+      each(round, theta);
+    }
+    return true;
+  };
+  std::vector<SensorMuscleCandidate> round_starts;
+  if (o.rollout_rounds > 0 && result.candidates[best].window_frames == 1) {
+    round_starts.push_back(result.candidates[best]);
+    const SensorMuscleCandidate* lowest = nullptr;
+    for (const SensorMuscleCandidate& c : result.candidates)
+      if (c.window_frames == 1 && std::isfinite(c.validation_rms_m) &&
+          (!lowest || c.validation_rms_m < lowest->validation_rms_m))
+        lowest = &c;
+    if (lowest && lowest->ridge != round_starts[0].ridge) round_starts.push_back(*lowest);
+  }
+  for (const SensorMuscleCandidate& start : round_starts) {
+    runRounds(best_sys, start.ridge, validation_start, validation_start - o.horizon_frames - 1, o.rollout_rounds,
+              [&](int round, const Eigen::VectorXd& theta) {
+                SensorMuscleCandidate c = start;
+                c.rollout_rounds = round;
+                c.validation_rms_m = std::nan("");
+                try {
+                  judge(fitter.build(theta, o.gain_margin, validation_start), &c.validation_rms_m, nullptr, &c.bounded);
+                } catch (const InputError&) {
+                }
+                if (!std::isfinite(c.validation_rms_m)) c.bounded = false;
+                char line[240];
+                std::snprintf(line, sizeof(line), "sensor muscles: ridge %.0e, rollout round %d: %d frames "
+                              "ahead on the last %d frames %.2f mm, rollout %s", c.ridge, round,
+                              o.horizon_frames, frames - validation_start, 1e3 * c.validation_rms_m,
+                              c.bounded ? "bounded" : "unbounded");
+                say(line);
+                result.candidates.push_back(c);
+                const SensorMuscleCandidate& b = result.candidates[best];
+                if (std::isfinite(c.validation_rms_m) && ((c.bounded && !b.bounded) ||
+                    (c.bounded == b.bounded && c.validation_rms_m < b.validation_rms_m)))
+                  best = static_cast<int>(result.candidates.size()) - 1;
+              });
+  }
   const SensorMuscleCandidate chosen = result.candidates[best];
   result.chosen = best;
   result.window_frames = chosen.window_frames;
@@ -585,12 +772,19 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   result.validation_rms_m = chosen.validation_rms_m;
   result.better_than_passive = chosen.bounded && chosen.validation_rms_m < result.passive_rms_m;
 
-  // The chosen window and ridge on every frame: the validation fit's equations plus the rest.
+  // The chosen candidate on every frame: the validation fit's equations plus the rest, and its
+  // rounds of rollout equations run again on every frame.
   System& sys = best_sys;
   fitter.accumulate(chosen.window_frames, validation_start - chosen.window_frames, frames, &sys);
   Eigen::VectorXd theta;
-  if (!fitter.solve(sys, result.ridge, &theta))
+  if (chosen.rollout_rounds > 0) {
+    say("sensor muscles: " + std::to_string(chosen.rollout_rounds) + " rollout rounds on every frame");
+    if (!runRounds(sys, chosen.ridge, frames, frames, chosen.rollout_rounds,
+                   [&](int, const Eigen::VectorXd& t) { theta = t; }))
+      throw InputError("sensor muscles: the final solve failed");
+  } else if (!fitter.solve(sys, result.ridge, &theta)) {
     throw InputError("sensor muscles: the final solve failed");
+  }
   result.rows = sys.rows;
   // A row sums window^2 frames' a h^2 (the triangle's weights): per frame, divided by that.
   const double per_frame = 1.0 / (passive.frame_rate_hz * passive.frame_rate_hz *

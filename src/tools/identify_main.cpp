@@ -29,7 +29,7 @@ const char* kUsage =
     "                [--refine bobyqa|newuoa|praxis|levenberg_marquardt] [--refine-start G]\n"
     "                [--refine-period G] [--select-structure]\n"
     "                [--add-muscles INPUTS] [--muscle-hidden H]\n"
-    "                [--sensor-muscles SENSORS] [--muscle-neighbours K]\n";
+    "                [--sensor-muscles SENSORS] [--muscle-neighbours K] [--rollout-rounds R]\n";
 
 std::string formatMetres(double m) {
   char text[32];
@@ -42,7 +42,8 @@ int run(int argc, char** argv) {
                     {"model", "trajectory", "topic", "out", "method", "generations", "population",
                      "window-frames", "first-frame", "frames", "seed", "threads", "target-cost",
                      "max-time-s", "refine", "refine-start", "refine-period", "preset", "patience", "cost", "segment-frames",
-                     "add-muscles", "muscle-hidden", "sensor-muscles", "muscle-neighbours"},
+                     "add-muscles", "muscle-hidden", "sensor-muscles", "muscle-neighbours",
+                     "rollout-rounds"},
                     {"compare-to-model", "quiet", "help", "select-structure"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -158,7 +159,8 @@ int run(int argc, char** argv) {
                 "unit(s)\n", muscles, reads, placement.hidden);
   }
 
-  const bool sensor_muscles = args.has("sensor-muscles") || args.has("muscle-neighbours");
+  const bool sensor_muscles =
+      args.has("sensor-muscles") || args.has("muscle-neighbours") || args.has("rollout-rounds");
   mme::SensorMuscleOptions sensor_options;
   if (sensor_muscles) {
     if (compare)
@@ -168,6 +170,8 @@ int run(int argc, char** argv) {
         args.getInt("sensor-muscles", sensor_options.sensors, 1, mme::kMaxMuscleInputs));
     sensor_options.neighbours = static_cast<int>(
         args.getInt("muscle-neighbours", sensor_options.neighbours, 0, 64));
+    sensor_options.rollout_rounds = static_cast<int>(
+        args.getInt("rollout-rounds", sensor_options.rollout_rounds, 0, 20));
     sensor_options.progress = [&](const std::string& line) {
       if (!quiet) std::printf("identify: %s\n", line.c_str());
       std::fflush(stdout);

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
@@ -70,7 +71,11 @@ TEST(SensorMuscles, LearnTheControllerThePassiveModelLacks) {
   EXPECT_EQ(r.unknowns, static_cast<size_t>(r.muscles * (2 * 6 + 3)));
   EXPECT_TRUE(r.better_than_passive);
   const mme::SensorMuscleOptions o = smallOptions();
-  ASSERT_EQ(r.candidates.size(), o.windows_frames.size() * o.ridges.size());
+  // The one-step candidates, then the rounds from one or two of them.
+  const size_t plain = o.windows_frames.size() * o.ridges.size();
+  ASSERT_GE(r.candidates.size(), plain + o.rollout_rounds);
+  ASSERT_LE(r.candidates.size(), plain + 2 * o.rollout_rounds);
+  ASSERT_EQ((r.candidates.size() - plain) % o.rollout_rounds, 0u);
   ASSERT_GE(r.chosen, 0);
   ASSERT_LT(r.chosen, static_cast<int>(r.candidates.size()));
   const mme::SensorMuscleCandidate& chosen = r.candidates[r.chosen];
@@ -207,6 +212,15 @@ TEST(SensorMuscles, BadInputGetsClearErrors) {
   o = smallOptions();
   o.ridges = {1e-3, -1.0};
   EXPECT_NE(message(passive, data, o).find("ridge"), std::string::npos);
+  o = smallOptions();
+  o.rollout_rounds = -1;
+  EXPECT_NE(message(passive, data, o).find("rollout rounds must be 0..20"), std::string::npos);
+  o = smallOptions();
+  o.rollout_stride_frames = 0;
+  EXPECT_NE(message(passive, data, o).find("rollout stride"), std::string::npos);
+  o = smallOptions();
+  o.rollout_correction_frames = std::nan("");
+  EXPECT_NE(message(passive, data, o).find("rollout correction"), std::string::npos);
   EXPECT_NE(message(passive, mme::sliceFrames(data, 0, 12), smallOptions()).find("too few"),
             std::string::npos);
   Model unvalued = passive;
@@ -231,3 +245,53 @@ TEST(SensorMuscles, BadInputGetsClearErrors) {
 }
 
 }  // namespace
+
+TEST(SensorMuscles, RolloutEquationsUndoTheNoiseBias) {
+  // With 0.3 mm of marker noise the one-step equations are biased (noise in the regressors and,
+  // over h^2, in the accelerations); the rollout rounds add the equations of the model's own
+  // predictions, and the held-out error 10 frames ahead falls (measured: 13.7 -> 4.7 mm).
+  LinearControllerCase setup;
+  mme::addGaussianNoise(&setup.data, 3e-4, 7);
+  const mme::Trajectory fitted = mme::sliceFrames(setup.data, 0, kFitted);
+  mme::SensorMuscleOptions one_step = smallOptions();
+  one_step.rollout_rounds = 0;
+  const mme::SensorMuscleResult r0 = mme::addSensorMuscles(setup.passive, fitted, one_step);
+  const mme::SensorMuscleOptions o = smallOptions();
+  ASSERT_GT(o.rollout_rounds, 0) << "rollout rounds are the default";
+  const mme::SensorMuscleResult r = mme::addSensorMuscles(setup.passive, fitted, o);
+  // The one-step candidates first, as without rounds, then one per round from the best one's
+  // ridge and, when it differs, one per round from the lowest error's (its rollout unbounded).
+  const size_t plain = o.windows_frames.size() * o.ridges.size();
+  size_t best_plain = 0, lowest = 0;  // best: bounded first, then the lowest error
+  for (size_t c = 0; c < plain; ++c) {
+    EXPECT_EQ(r.candidates[c].rollout_rounds, 0);
+    EXPECT_EQ(r.candidates[c].validation_rms_m, r0.candidates[c].validation_rms_m);
+    const mme::SensorMuscleCandidate &x = r.candidates[c], &b = r.candidates[best_plain];
+    if ((x.bounded && !b.bounded) || (x.bounded == b.bounded && x.validation_rms_m < b.validation_rms_m))
+      best_plain = c;
+    if (x.validation_rms_m < r.candidates[lowest].validation_rms_m) lowest = c;
+  }
+  std::vector<double> start_ridges = {r.candidates[best_plain].ridge};
+  if (lowest != best_plain) start_ridges.push_back(r.candidates[lowest].ridge);
+  ASSERT_EQ(r.candidates.size(), plain + start_ridges.size() * o.rollout_rounds);
+  for (size_t start = 0; start < start_ridges.size(); ++start)
+    for (int round = 1; round <= o.rollout_rounds; ++round) {
+      const mme::SensorMuscleCandidate& c = r.candidates[plain + start * o.rollout_rounds + round - 1];
+      EXPECT_EQ(c.rollout_rounds, round);
+      EXPECT_EQ(c.ridge, start_ridges[start]);
+    }
+  ASSERT_GE(r.chosen, static_cast<int>(plain)) << "no round predicted the validation frames better";
+  for (const mme::SensorMuscleCandidate& c : r.candidates) {
+    if (c.bounded) {
+      EXPECT_GE(c.validation_rms_m, r.validation_rms_m);
+    }
+  }
+  bool bounded = false;
+  const double with_rounds = heldOutRms(r.model, setup.data, &bounded);
+  const double without = heldOutRms(r0.model, setup.data);
+  std::printf("0.3 mm noise, held out %d frames ahead: one-step %.3g m, %d rollout round(s) %.3g "
+              "m, passive %.3g m\n", kHorizon, without, r.candidates[r.chosen].rollout_rounds,
+              with_rounds, heldOutRms(setup.passive, setup.data));
+  EXPECT_TRUE(bounded);
+  EXPECT_LT(with_rounds, 0.7 * without);
+}

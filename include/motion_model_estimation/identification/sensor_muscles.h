@@ -35,6 +35,19 @@
 // divided by it, so tanh stays within 0.4 % of linear where the data went (and bounds the
 // activation beyond).
 //
+// Rollout equations (Data as Demonstrator, Venkatraman, Hebert and Bagnell 2015): the one-step
+// fit learns where the data go from where the data are, but a prediction 10 frames ahead runs
+// from where its own errors took it, and with noisy markers the one-step equations are biased
+// (the noise is in the regressors and, over h^2, in the accelerations). So, after the one-step
+// fit of the best (window 1, ridge) candidate, `rollout_rounds` rounds each run the current model
+// open loop horizon_frames - 1 frames from every `rollout_stride_frames`-th frame, and at every
+// predicted frame t + k add the equation at the predicted posture and speeds whose target is the
+// data's acceleration at t + k plus a critically damped return to the data, time constant
+// `rollout_correction_frames` (a return in one step asks for drift / h^2: high-gain feedback
+// that took the rollouts off the data when tried); the fit is solved again on all rows gathered
+// (the ridge relative to the one-step rows' mean diagonal). Each round is a candidate judged like
+// the others; the chosen round count is run again on every frame for the final fit.
+//
 // The muscles' and sensors' parameters are written fixed (identified here, not by the search).
 // Frames where a sensor is unseen, and particles whose bond partners are unseen, drop out.
 #pragma once
@@ -66,6 +79,16 @@ struct SensorMuscleOptions {
   /// controller: with negative ones the closed loop leaves the data within the 10x rollout).
   bool nonnegative_own_spring = true;
   double gain_margin = 10.0;         ///< gain = margin x the largest linear activation [1]
+  /// Rounds of rollout equations (Data as Demonstrator) after the one-step fit of the best
+  /// (window, ridge): each round runs the current model horizon_frames - 1 frames open loop from
+  /// every rollout_stride_frames-th frame and adds, at each predicted frame, the equation that
+  /// would take the prediction back to the data one frame later; the fit is solved again on all
+  /// rows gathered so far. Each round is a candidate judged like the others.
+  int rollout_rounds = 3;
+  int rollout_stride_frames = 2;  ///< starts of the rollout equations, every this many frames
+  /// The rollout equations' target: the data's acceleration plus a critically damped return to
+  /// the data with this time constant [frames] (0: the data's acceleration alone).
+  double rollout_correction_frames = 10.0;
   /// A pair is a sensor or a neighbour muscle only when both particles are seen together in at
   /// least this share of the frames.
   double min_seen_share = 0.9;
@@ -78,6 +101,7 @@ struct SensorMuscleCandidate {
   double ridge = 0.0;
   double validation_rms_m = std::numeric_limits<double>::quiet_NaN();  ///< NaN: failed
   bool bounded = false;  ///< its validation rollout stayed bounded
+  int rollout_rounds = 0;  ///< rounds of rollout equations (SensorMuscleOptions::rollout_rounds)
 };
 
 struct SensorMuscleResult {
