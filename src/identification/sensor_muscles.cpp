@@ -404,18 +404,17 @@ class Fitter {
 
   /// Adds one frame's equations (window 1).
   void addPieces(const FramePieces& f, System* sys) const {
+    std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>> g(m_);
     for (int i = 0; i < n_; ++i) {
       if (!f.particle_ok[i]) continue;
       const double mass = passive_.particles[i].mass_kg;
       sys->btb += f.y[i].squaredNorm();
       sys->rows += 3;
+      for (const auto& [m, sign] : at_[i]) g[m] = (sign / mass) * f.u[m] * f.phi.col(m).transpose();
       for (const auto& [m, sign] : at_[i]) {
-        const Eigen::Matrix<double, 3, Eigen::Dynamic> g = (sign / mass) * f.u[m] * f.phi.col(m).transpose();
-        sys->atb.segment(m * k_, k_).noalias() += g.transpose() * f.y[i];
-        for (const auto& [m2, sign2] : at_[i]) {
-          const Eigen::Matrix<double, 3, Eigen::Dynamic> g2 = (sign2 / mass) * f.u[m2] * f.phi.col(m2).transpose();
-          sys->ata.block(m * k_, m2 * k_, k_, k_).noalias() += g.transpose() * g2;
-        }
+        sys->atb.segment(m * k_, k_).noalias() += g[m].transpose() * f.y[i];
+        for (const auto& [m2, sign2] : at_[i])
+          sys->ata.block(m * k_, m2 * k_, k_, k_).noalias() += g[m].transpose() * g[m2];
       }
     }
   }
