@@ -81,6 +81,14 @@ class Fitter {
       at_[layout.muscles[m].b].push_back({m, -1.0});
     }
     computeScales();
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (int t = 0; t < data.numFrames(); ++t)
+      for (int i = 0; i < n_; ++i)
+        if (!data.isOccluded(t, i)) {
+          lo = lo.cwiseMin(data.position(t, i));
+          hi = hi.cwiseMax(data.position(t, i));
+        }
+    extent_m_ = lo.allFinite() && hi.allFinite() ? std::max((hi - lo).norm(), 1e-3) : 1e-3;
   }
 
   int unknowns() const { return m_ * k_; }
@@ -131,15 +139,22 @@ class Fitter {
     }
   }
 
+  /// Starts and rollouts of one round of rollout equations.
+  struct RolloutCount {
+    int starts = 0;   ///< rollouts run
+    int stopped = 0;  ///< rollouts stopped early: non-finite, or farther from the data than
+                      ///< the data's extent (their later rows would only carry the blow-up)
+  };
+
   /// Adds the equations of the model's own open-loop predictions (Data as Demonstrator,
   /// Venkatraman et al. 2015): from every `stride`-th start t in [start_begin, start_end) whose
   /// particles are all seen at t-1 and t, the model carrying theta runs horizon - 1 frames; at
-  /// each predicted frame t + k the equation asks the muscles for the acceleration that takes
-  /// the prediction back to the data at t + k + 1, from the predicted posture and speeds. The
-  /// one-step fit learns where the data go from where the data are; these rows teach it where
-  /// to go from where its own errors take it, which is what a prediction k frames ahead meets.
-  /// Returns the number of starts used.
-  int accumulateRollouts(const Eigen::VectorXd& theta, double margin, int gain_t_end, int horizon,
+  /// each predicted frame t + k the equation is written at the predicted posture and speeds,
+  /// its target the data's acceleration at t + k plus a critically damped return to the data
+  /// with time constant `correction_frames` (0: none). The one-step fit learns where the data go
+  /// from where the data are; these rows teach it where to go from where its own errors take
+  /// it, which is what a prediction k frames ahead meets.
+  RolloutCount accumulateRollouts(const Eigen::VectorXd& theta, double margin, int gain_t_end, int horizon,
                          int stride, double correction_frames, int start_begin, int start_end,
                          System* sys) const {
     if (sys->ata.rows() == 0) {
@@ -149,7 +164,7 @@ class Fitter {
     const Model model = build(theta, margin, gain_t_end);
     Simulator sim(model);
     const int last = std::min(start_end, data_.numFrames() - horizon);  // exclusive
-    int starts = 0;
+    RolloutCount count;
     std::vector<Eigen::Vector3d> before, next;
     std::vector<uint8_t> occluded;
     State state;
@@ -158,7 +173,7 @@ class Fitter {
       for (int i = 0; i < n_ && all_seen; ++i)
         all_seen = !data_.isOccluded(t, i) && !data_.isOccluded(t - 1, i);
       if (!all_seen) continue;
-      ++starts;
+      ++count.starts;
       state.x_m.assign(n_, Eigen::Vector3d::Zero());
       state.v_mps.assign(n_, Eigen::Vector3d::Zero());
       for (int i = 0; i < n_; ++i) {
@@ -169,9 +184,14 @@ class Fitter {
       for (int k = 1; k < horizon; ++k) {
         before = state.x_m;
         sim.stepFrame(&state, h_);
-        bool finite = true;
-        for (const Eigen::Vector3d& x : state.x_m) finite = finite && x.allFinite();
-        if (!finite) break;
+        bool near = true;
+        for (int i = 0; i < n_ && near; ++i)
+          near = state.x_m[i].allFinite() &&
+                 (data_.isOccluded(t + k, i) || (state.x_m[i] - data_.position(t + k, i)).norm() <= extent_m_);
+        if (!near) {
+          ++count.stopped;
+          break;
+        }
         // The target: the data's acceleration at t + k, plus a correction that would bring the
         // prediction back to the data with time constant tau (critically damped), not in one
         // step (a one-step return asks for accelerations of drift / h^2: high-gain feedback).
@@ -202,7 +222,7 @@ class Fitter {
         addPieces(pieces(f), sys);
       }
     }
-    return starts;
+    return count;
   }
 
   /// theta for a relative ridge, every muscle's own stiffness and damping >= 0 (when
@@ -526,6 +546,7 @@ class Fitter {
   bool own_spring_nonnegative_;  ///< see solve()
   int n_, s_, m_, k_;
   double h_ = 0.0;
+  double extent_m_ = 0.0;  ///< the data's bounding-box diagonal [m]
   std::vector<std::vector<int>> partners_;
   bool all_partners_ = false;
   std::vector<std::vector<std::pair<int, double>>> at_;  ///< per particle: (muscle, sign)
@@ -717,16 +738,17 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   // equations can bound it): each round a candidate of its own.
   // The ridge stays relative to the one-step rows' mean diagonal as rollout rows are added.
   auto runRounds = [&](const System& data_rows, double ridge, int gain_t_end, int start_end, int rounds,
-                       const std::function<void(int, const Eigen::VectorXd&)>& each) {
+                       const std::function<void(int, const Eigen::VectorXd&, const Fitter::RolloutCount&)>& each) {
     const double reference_diagonal = Fitter::meanDiagonal(data_rows);
     Eigen::VectorXd theta;
     if (!fitter.solve(data_rows, ridge, &theta, reference_diagonal)) return false;
     System all = data_rows;
     for (int round = 1; round <= rounds; ++round) {
-      fitter.accumulateRollouts(theta, o.gain_margin, gain_t_end, o.horizon_frames,
-                                o.rollout_stride_frames, o.rollout_correction_frames, 1, start_end, &all);
+      const Fitter::RolloutCount count =
+          fitter.accumulateRollouts(theta, o.gain_margin, gain_t_end, o.horizon_frames,
+                                    o.rollout_stride_frames, o.rollout_correction_frames, 1, start_end, &all);
       if (!fitter.solve(all, ridge, &theta, reference_diagonal)) return false;
-      each(round, theta);
+      each(round, theta, count);
     }
     return true;
   };
@@ -742,7 +764,7 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   }
   for (const SensorMuscleCandidate& start : round_starts) {
     runRounds(best_sys, start.ridge, validation_start, validation_start - o.horizon_frames - 1, o.rollout_rounds,
-              [&](int round, const Eigen::VectorXd& theta) {
+              [&](int round, const Eigen::VectorXd& theta, const Fitter::RolloutCount& count) {
                 SensorMuscleCandidate c = start;
                 c.rollout_rounds = round;
                 c.validation_rms_m = std::nan("");
@@ -752,8 +774,9 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
                 }
                 if (!std::isfinite(c.validation_rms_m)) c.bounded = false;
                 char line[240];
-                std::snprintf(line, sizeof(line), "sensor muscles: ridge %.0e, rollout round %d: %d frames "
-                              "ahead on the last %d frames %.2f mm, rollout %s", c.ridge, round,
+                std::snprintf(line, sizeof(line), "sensor muscles: ridge %.0e, rollout round %d (%d "
+                              "rollouts, %d stopped off the data): %d frames ahead on the last %d "
+                              "frames %.2f mm, rollout %s", c.ridge, round, count.starts, count.stopped,
                               o.horizon_frames, frames - validation_start, 1e3 * c.validation_rms_m,
                               c.bounded ? "bounded" : "unbounded");
                 say(line);
@@ -779,7 +802,7 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   if (chosen.rollout_rounds > 0) {
     say("sensor muscles: " + std::to_string(chosen.rollout_rounds) + " rollout rounds on every frame");
     if (!runRounds(sys, chosen.ridge, frames, frames, chosen.rollout_rounds,
-                   [&](int, const Eigen::VectorXd& t) { theta = t; }))
+                   [&](int, const Eigen::VectorXd& t, const Fitter::RolloutCount&) { theta = t; }))
       throw InputError("sensor muscles: the final solve failed");
   } else if (!fitter.solve(sys, result.ridge, &theta)) {
     throw InputError("sensor muscles: the final solve failed");
