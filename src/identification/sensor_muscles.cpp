@@ -128,13 +128,7 @@ class Fitter {
           y += w * f.y[i];
           for (const auto& [m, sign] : at_[i]) g[m].noalias() += (w * sign / mass) * f.u[m] * f.phi.col(m).transpose();
         }
-        sys->btb += y.squaredNorm();
-        sys->rows += 3;
-        for (const auto& [m, sign] : at_[i]) {
-          sys->atb.segment(m * k_, k_).noalias() += g[m].transpose() * y;
-          for (const auto& [m2, sign2] : at_[i])
-            sys->ata.block(m * k_, m2 * k_, k_, k_).noalias() += g[m].transpose() * g[m2];
-        }
+        addEquation(i, g, y, sys);
       }
     }
   }
@@ -195,17 +189,17 @@ class Fitter {
         // The target: the data's acceleration at t + k, plus a correction that would bring the
         // prediction back to the data with time constant tau (critically damped), not in one
         // step (a one-step return asks for accelerations of drift / h^2: high-gain feedback).
-        const size_t now = static_cast<size_t>(t + k) * n_;
+        const Frames3 d = dataFrames(t + k);
         next.resize(n_);
         occluded.assign(n_, 0);
         for (int i = 0; i < n_; ++i) {
-          if (data_.occluded[now - n_ + i] || data_.occluded[now + i] || data_.occluded[now + n_ + i]) {
+          if (!d.seen(0, i) || !d.seen(1, i) || !d.seen(2, i)) {
             occluded[i] = 1;
             continue;
           }
-          const Eigen::Vector3d& x0 = data_.positions_m[now - n_ + i];
-          const Eigen::Vector3d& x1 = data_.positions_m[now + i];
-          const Eigen::Vector3d& x2 = data_.positions_m[now + n_ + i];
+          const Eigen::Vector3d& x0 = d.x[0][i];
+          const Eigen::Vector3d& x1 = d.x[1][i];
+          const Eigen::Vector3d& x2 = d.x[2][i];
           Eigen::Vector3d acc = (x2 - 2.0 * x1 + x0) / (h_ * h_);
           if (correction_frames > 0.0) {
             const double tau = correction_frames * h_;
@@ -233,8 +227,7 @@ class Fitter {
   /// are added), else to the system's own mean diagonal.
   bool solve(const System& sys, double ridge, Eigen::VectorXd* theta, double reference_diagonal = 0.0) const {
     constexpr int kMaxClampRounds = 6;
-    const double mean_diagonal =
-        reference_diagonal > 0.0 ? reference_diagonal : std::max(sys.ata.diagonal().mean(), 1e-300);
+    const double mean_diagonal = reference_diagonal > 0.0 ? reference_diagonal : meanDiagonal(sys);
     std::vector<int> clamped;
     for (int round = 0;; ++round) {
       Eigen::MatrixXd a = sys.ata;
@@ -263,9 +256,10 @@ class Fitter {
     }
   }
 
-  /// RMS of a system's rows at theta [m/s^2].
+  /// The mean diagonal of a system's normal matrix (the ridges' reference).
   static double meanDiagonal(const System& sys) { return std::max(sys.ata.diagonal().mean(), 1e-300); }
 
+  /// RMS of a system's rows at theta [m/s^2].
   static double residualRms(const System& sys, const Eigen::VectorXd& theta) {
     if (sys.rows == 0) return 0.0;
     const double r2 = sys.btb - 2.0 * theta.dot(sys.atb) + theta.dot(sys.ata * theta);
@@ -428,14 +422,21 @@ class Fitter {
     for (int i = 0; i < n_; ++i) {
       if (!f.particle_ok[i]) continue;
       const double mass = passive_.particles[i].mass_kg;
-      sys->btb += f.y[i].squaredNorm();
-      sys->rows += 3;
       for (const auto& [m, sign] : at_[i]) g[m] = (sign / mass) * f.u[m] * f.phi.col(m).transpose();
-      for (const auto& [m, sign] : at_[i]) {
-        sys->atb.segment(m * k_, k_).noalias() += g[m].transpose() * f.y[i];
-        for (const auto& [m2, sign2] : at_[i])
-          sys->ata.block(m * k_, m2 * k_, k_, k_).noalias() += g[m].transpose() * g[m2];
-      }
+      addEquation(i, g, f.y[i], sys);
+    }
+  }
+
+  /// Adds particle i's three rows y = sum over its muscles of g[m] theta_m to the normal
+  /// equations.
+  void addEquation(int i, const std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>>& g,
+                   const Eigen::Vector3d& y, System* sys) const {
+    sys->btb += y.squaredNorm();
+    sys->rows += 3;
+    for (const auto& [m, sign] : at_[i]) {
+      sys->atb.segment(m * k_, k_).noalias() += g[m].transpose() * y;
+      for (const auto& [m2, sign2] : at_[i])
+        sys->ata.block(m * k_, m2 * k_, k_, k_).noalias() += g[m].transpose() * g[m2];
     }
   }
 
@@ -693,6 +694,7 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   int best = -1;
   bool any_rows = false;
   System best_sys;  // the equations of the best candidate's window, to be completed below
+  std::vector<Eigen::VectorXd> thetas;  // per one-step candidate, its fit (empty: the solve failed)
   for (int window : o.windows_frames) {
     System sys;
     fitter.accumulate(window, 0, validation_start - window, &sys);
@@ -710,7 +712,10 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
         } catch (const InputError&) {
           c.validation_rms_m = std::nan("");
         }
+      } else {
+        theta.resize(0);
       }
+      thetas.push_back(std::move(theta));
       if (!std::isfinite(c.validation_rms_m)) c.bounded = false;
       char line[240];
       std::snprintf(line, sizeof(line), "sensor muscles: window %d, ridge %.0e: %d frames ahead on "
@@ -736,12 +741,12 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   // Rollout equations from the best one-step candidate and, when another of its window predicted
   // the validation frames better but left its rollout unbounded, from that one too (the rollout
   // equations can bound it): each round a candidate of its own.
-  // The ridge stays relative to the one-step rows' mean diagonal as rollout rows are added.
-  auto runRounds = [&](const System& data_rows, double ridge, int gain_t_end, int start_end, int rounds,
+  // Each runs from the one-step fit theta on data_rows; the ridge stays relative to those rows'
+  // mean diagonal as rollout rows are added.
+  auto runRounds = [&](const System& data_rows, double ridge, Eigen::VectorXd theta, int gain_t_end,
+                       int start_end, int rounds,
                        const std::function<void(int, const Eigen::VectorXd&, const Fitter::RolloutCount&)>& each) {
     const double reference_diagonal = Fitter::meanDiagonal(data_rows);
-    Eigen::VectorXd theta;
-    if (!fitter.solve(data_rows, ridge, &theta, reference_diagonal)) return false;
     System all = data_rows;
     for (int round = 1; round <= rounds; ++round) {
       const Fitter::RolloutCount count =
@@ -752,18 +757,23 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
     }
     return true;
   };
-  std::vector<SensorMuscleCandidate> round_starts;
+  std::vector<int> round_starts;  // candidates' indices
   if (o.rollout_rounds > 0 && result.candidates[best].window_frames == 1) {
-    round_starts.push_back(result.candidates[best]);
-    const SensorMuscleCandidate* lowest = nullptr;
-    for (const SensorMuscleCandidate& c : result.candidates)
+    round_starts.push_back(best);
+    int lowest = -1;
+    for (int k = 0; k < static_cast<int>(result.candidates.size()); ++k) {
+      const SensorMuscleCandidate& c = result.candidates[k];
       if (c.window_frames == 1 && std::isfinite(c.validation_rms_m) &&
-          (!lowest || c.validation_rms_m < lowest->validation_rms_m))
-        lowest = &c;
-    if (lowest && lowest->ridge != round_starts[0].ridge) round_starts.push_back(*lowest);
+          (lowest < 0 || c.validation_rms_m < result.candidates[lowest].validation_rms_m))
+        lowest = k;
+    }
+    if (lowest >= 0 && result.candidates[lowest].ridge != result.candidates[best].ridge)
+      round_starts.push_back(lowest);
   }
-  for (const SensorMuscleCandidate& start : round_starts) {
-    runRounds(best_sys, start.ridge, validation_start, validation_start - o.horizon_frames - 1, o.rollout_rounds,
+  for (int index : round_starts) {
+    const SensorMuscleCandidate start = result.candidates[index];
+    runRounds(best_sys, start.ridge, thetas[index], validation_start,
+              validation_start - o.horizon_frames - 1, o.rollout_rounds,
               [&](int round, const Eigen::VectorXd& theta, const Fitter::RolloutCount& count) {
                 SensorMuscleCandidate c = start;
                 c.rollout_rounds = round;
@@ -799,13 +809,12 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   System& sys = best_sys;
   fitter.accumulate(chosen.window_frames, validation_start - chosen.window_frames, frames, &sys);
   Eigen::VectorXd theta;
+  if (!fitter.solve(sys, result.ridge, &theta)) throw InputError("sensor muscles: the final solve failed");
   if (chosen.rollout_rounds > 0) {
     say("sensor muscles: " + std::to_string(chosen.rollout_rounds) + " rollout rounds on every frame");
-    if (!runRounds(sys, chosen.ridge, frames, frames, chosen.rollout_rounds,
+    if (!runRounds(sys, chosen.ridge, theta, frames, frames, chosen.rollout_rounds,
                    [&](int, const Eigen::VectorXd& t, const Fitter::RolloutCount&) { theta = t; }))
       throw InputError("sensor muscles: the final solve failed");
-  } else if (!fitter.solve(sys, result.ridge, &theta)) {
-    throw InputError("sensor muscles: the final solve failed");
   }
   result.rows = sys.rows;
   // A row sums window^2 frames' a h^2 (the triangle's weights): per frame, divided by that.
