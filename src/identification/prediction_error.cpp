@@ -33,20 +33,23 @@ const char* predictorName(Predictor predictor) {
 }
 
 bool fillFromNeighbours(const Observations& obs, const Model& model, int t, int i,
-                        Eigen::Vector3d* position_m) {
+                        Eigen::Vector3d* position_m, bool later_frames_too) {
   const auto x = [&](int f, int j) { return Eigen::Map<const Eigen::Vector3d>(obs.position(f, j)); };
   if (!obs.isOccluded(t, i)) {
     *position_m = x(t, i);
     return true;
   }
-  for (int s = t - 1; s >= 0; --s) {
-    if (obs.isOccluded(s, i)) continue;
+  // The frames tried, nearest first: t-1, t-2, ... or, with later frames, t-1, t+1, t-2, t+2, ...
+  const int tries = later_frames_too ? 2 * std::max(t, obs.frames - 1 - t) : t;
+  for (int step = 1; step <= tries; ++step) {
+    const int s = later_frames_too ? (step % 2 ? t - (step + 1) / 2 : t + step / 2) : t - step;
+    if (s < 0 || s >= obs.frames || obs.isOccluded(s, i)) continue;
     std::vector<std::pair<double, int>> near;
     for (int j = 0; j < obs.particles; ++j)
       if (j != i && !model.particles[j].fixed && !obs.isOccluded(s, j) && !obs.isOccluded(t, j))
         near.emplace_back((x(s, j) - x(s, i)).squaredNorm(), j);
-    // The latest frame where i was seen is its best picture; with too few companions there, an
-    // earlier one is tried.
+    // The nearest frame where i was seen is its best picture; with too few companions there, the
+    // next one is tried.
     if (static_cast<int>(near.size()) < 3) continue;
     const size_t m = std::min<size_t>(kFillNeighbours, near.size());
     std::partial_sort(near.begin(), near.begin() + static_cast<long>(m), near.end());

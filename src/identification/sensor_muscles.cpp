@@ -16,6 +16,7 @@
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/muscle.h"
+#include "motion_model_estimation/core/observations.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/prediction_error.h"
 
@@ -59,7 +60,7 @@ struct System {
 class Fitter {
  public:
   Fitter(const Model& passive, const Trajectory& data, const Layout& layout, bool nonnegative_own_spring)
-      : passive_(passive), data_(data), layout_(layout), sim_(passive),
+      : passive_(passive), data_(data), obs_(prepareObservations(passive, data)), layout_(layout), sim_(passive),
         own_spring_nonnegative_(nonnegative_own_spring),
         n_(static_cast<int>(passive.particles.size())),
         s_(static_cast<int>(layout.sensors.size())),
@@ -136,13 +137,14 @@ class Fitter {
   /// Starts and rollouts of one round of rollout equations.
   struct RolloutCount {
     int starts = 0;   ///< rollouts run
+    int filled = 0;   ///< of which a particle was placed from its neighbours (startState)
     int stopped = 0;  ///< rollouts stopped early: non-finite, or farther from the data than
                       ///< the data's extent (their later rows would only carry the blow-up)
   };
 
   /// Adds the equations of the model's own open-loop predictions (Data as Demonstrator,
-  /// Venkatraman et al. 2015): from every `stride`-th start t in [start_begin, start_end) whose
-  /// particles are all seen at t-1 and t, the model carrying theta runs horizon - 1 frames; at
+  /// Venkatraman et al. 2015): from every `stride`-th start t in [start_begin, start_end) where
+  /// every particle can be placed (startState), the model carrying theta runs horizon - 1 frames; at
   /// each predicted frame t + k the equation is written at the predicted posture and speeds,
   /// its target the data's acceleration at t + k plus a critically damped return to the data
   /// with time constant `correction_frames` (0: none). The one-step fit learns where the data go
@@ -163,18 +165,10 @@ class Fitter {
     std::vector<uint8_t> occluded;
     State state;
     for (int t = std::max(start_begin, 1); t < last; t += stride) {
-      bool all_seen = true;
-      for (int i = 0; i < n_ && all_seen; ++i)
-        all_seen = !data_.isOccluded(t, i) && !data_.isOccluded(t - 1, i);
-      if (!all_seen) continue;
+      int filled = 0;
+      if (!startState(t, &state, &filled)) continue;
       ++count.starts;
-      state.x_m.assign(n_, Eigen::Vector3d::Zero());
-      state.v_mps.assign(n_, Eigen::Vector3d::Zero());
-      for (int i = 0; i < n_; ++i) {
-        state.x_m[i] = data_.position(t, i);
-        state.v_mps[i] = passive_.particles[i].fixed ? passive_.particles[i].velocity_mps
-                                                     : Eigen::Vector3d((data_.position(t, i) - data_.position(t - 1, i)) / h_);
-      }
+      if (filled > 0) ++count.filled;
       for (int k = 1; k < horizon; ++k) {
         before = state.x_m;
         sim.stepFrame(&state, h_);
@@ -217,6 +211,37 @@ class Fitter {
       }
     }
     return count;
+  }
+
+  /// The state a rollout starts from at frame t: a particle seen at t - 1 and t at its position
+  /// there, its velocity their difference; one unseen at either placed by the rigid motion of its
+  /// nearest neighbours from the nearest frame where it was seen, earlier or later
+  /// (fillFromNeighbours; `filled` counts these), as evaluatePredictions fills its starts; a
+  /// fixed one where the model holds it when unseen. False when a particle cannot be placed.
+  bool startState(int t, State* state, int* filled) const {
+    state->x_m.assign(n_, Eigen::Vector3d::Zero());
+    state->v_mps.assign(n_, Eigen::Vector3d::Zero());
+    for (int i = 0; i < n_; ++i) {
+      const Particle& p = passive_.particles[i];
+      if (p.fixed) {
+        state->x_m[i] = data_.isOccluded(t, i) ? p.position_m : data_.position(t, i);
+        state->v_mps[i] = p.velocity_mps;
+        continue;
+      }
+      Eigen::Vector3d now, before;
+      if (!data_.isOccluded(t, i) && !data_.isOccluded(t - 1, i)) {
+        now = data_.position(t, i);
+        before = data_.position(t - 1, i);
+      } else if (fillFromNeighbours(obs_, passive_, t, i, &now, true) &&
+                 fillFromNeighbours(obs_, passive_, t - 1, i, &before, true)) {
+        ++*filled;
+      } else {
+        return false;
+      }
+      state->x_m[i] = now;
+      state->v_mps[i] = (now - before) / h_;
+    }
+    return true;
   }
 
   /// theta for a relative ridge, every muscle's own stiffness and damping >= 0 (when
@@ -542,6 +567,7 @@ class Fitter {
 
   const Model& passive_;
   const Trajectory& data_;
+  const Observations obs_;  ///< data_ as the neighbour fill reads it
   const Layout& layout_;
   mutable Simulator sim_;  // computeForces keeps scratch
   bool own_spring_nonnegative_;  ///< see solve()
@@ -784,9 +810,11 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
                 }
                 if (!std::isfinite(c.validation_rms_m)) c.bounded = false;
                 char line[240];
+                c.rollout_starts = count.starts;
                 std::snprintf(line, sizeof(line), "sensor muscles: ridge %.0e, rollout round %d (%d "
-                              "rollouts, %d stopped off the data): %d frames ahead on the last %d "
-                              "frames %.2f mm, rollout %s", c.ridge, round, count.starts, count.stopped,
+                              "rollouts, %d from a filled marker, %d stopped off the data): %d frames "
+                              "ahead on the last %d frames %.2f mm, rollout %s", c.ridge, round,
+                              count.starts, count.filled, count.stopped,
                               o.horizon_frames, frames - validation_start, 1e3 * c.validation_rms_m,
                               c.bounded ? "bounded" : "unbounded");
                 say(line);

@@ -139,6 +139,37 @@ TEST(PredictionError, AnUnseenMarkerIsPlacedByItsNeighboursRigidMotion) {
   EXPECT_FALSE(mme::fillFromNeighbours(mme::prepareObservations(model, line), model, 30, 0, &none));
 }
 
+// A marker hidden from the recording's first frame has no earlier picture: placed only when
+// later frames may be read (fitting), then exactly, from the nearest frame where it is seen.
+TEST(PredictionError, AMarkerHiddenFromTheStartIsPlacedFromLaterFrames) {
+  const mme::Model model = freeParticles(5);
+  const mme::Trajectory truth = rigidMotion(60);
+  mme::Trajectory data = truth;
+  for (int t = 0; t < 20; ++t) {
+    data.occluded[t * 5] = 1;
+    data.position(t, 0) = Eigen::Vector3d(7, 7, 7);
+  }
+  const mme::Observations obs = mme::prepareObservations(model, data);
+  for (int t = 0; t < 20; ++t) {
+    Eigen::Vector3d p;
+    EXPECT_FALSE(mme::fillFromNeighbours(obs, model, t, 0, &p)) << t;
+    ASSERT_TRUE(mme::fillFromNeighbours(obs, model, t, 0, &p, true)) << t;
+    EXPECT_LT((p - truth.position(t, 0)).norm(), 1e-12) << t;
+  }
+  // The nearest picture first (an earlier one at equal distance): hidden in frames 30..40, its
+  // pictures after frame 40 moved 1 m off the body, frame 35 is placed from frame 29, exactly,
+  // and frame 39 from frame 41, 1 m off.
+  mme::Trajectory both = data;
+  for (int t = 30; t <= 40; ++t) both.occluded[t * 5] = 1;
+  for (int t = 41; t < 60; ++t) both.position(t, 0) += Eigen::Vector3d(1, 0, 0);
+  const mme::Observations both_obs = mme::prepareObservations(model, both);
+  Eigen::Vector3d p;
+  ASSERT_TRUE(mme::fillFromNeighbours(both_obs, model, 35, 0, &p, true));
+  EXPECT_LT((p - truth.position(35, 0)).norm(), 1e-12);
+  ASSERT_TRUE(mme::fillFromNeighbours(both_obs, model, 39, 0, &p, true));
+  EXPECT_NEAR((p - truth.position(39, 0)).norm(), 1.0, 1e-9);
+}
+
 // The judge starts where a marker is hidden (its start state filled; it is not scored from
 // there): as many starts as without the gap. The fill is what the model simulates from: a stiff
 // spring from the hidden marker at its exact (rigid) length pulls on nothing, so the bonded model

@@ -177,6 +177,38 @@ TEST(SensorMuscles, GapsDropEquationsNotTheFit) {
   EXPECT_LT(heldOutRms(gappy.model, data), 0.2 * heldOutRms(passive, data));
 }
 
+TEST(SensorMuscles, RolloutsStartWhereAMarkerIsHidden) {
+  // Particle 2 hidden in frames 0..29 and 50..69: the rollouts from those frames start with it
+  // placed by its neighbours' rigid motion (from the nearest frame it was seen, later ones too),
+  // so the rounds run from as many starts as on the whole data. A fifth particle tied to 1, 2
+  // and 3 gives particle 2 three free neighbours (the fixed one carries no body's motion).
+  Model truth = linearMuscleObject();
+  mme::test::addParticle(&truth, Eigen::Vector3d(0.15, 0.05, -0.2), 0.5, false, "",
+                         Eigen::Vector3d(0.0, 0.1, 0.0));
+  for (int other : {1, 2, 3}) mme::test::addBond(&truth, truth.bondTypeIndex("s"), 4, other);
+  const Model passive = mme::removeMuscles(truth);
+  mme::Trajectory data = mme::simulateTrajectory(truth, kFitted, truth.frame_rate_hz);
+  mme::SensorMuscleOptions o = smallOptions();
+  o.rollout_rounds = 1;
+  const mme::SensorMuscleResult whole = mme::addSensorMuscles(passive, data, o);
+  for (int t = 0; t < 70; ++t)
+    if (t < 30 || t >= 50) data.occluded[t * data.numMarkers() + 2] = 1;
+  const mme::SensorMuscleResult gappy = mme::addSensorMuscles(passive, data, o);
+  auto rounds = [](const mme::SensorMuscleResult& r) {
+    int starts = 0;
+    for (const mme::SensorMuscleCandidate& c : r.candidates)
+      if (c.rollout_rounds > 0) {
+        EXPECT_GT(c.rollout_starts, 0);
+        starts = c.rollout_starts;
+      }
+    return starts;
+  };
+  const int whole_starts = rounds(whole);
+  ASSERT_GT(whole_starts, 20);
+  EXPECT_EQ(rounds(gappy), whole_starts);
+  EXPECT_LT(gappy.rows, whole.rows);  // its own rows still drop where it is hidden
+}
+
 TEST(SensorMuscles, TheWrittenModelMovesAsTheFittedOne) {
   const Model truth = mme::test::muscleObject();
   const mme::Trajectory data = mme::simulateTrajectory(truth, kFrames, truth.frame_rate_hz);

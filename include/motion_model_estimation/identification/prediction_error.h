@@ -42,9 +42,11 @@ struct PredictionReport {
 /// else the rigid motion (least squares, Kabsch) of its nearest free neighbours (up to 4) from the
 /// latest frame s < t where it was seen to t, applied to x_i(s): the "rigid body fill" of
 /// motion-capture software (markers on one segment move together). False when no earlier frame
-/// has at least 3 neighbours seen both then and at t, off one line.
+/// has at least 3 neighbours seen both then and at t, off one line. With `later_frames_too`
+/// (for fitting, where the whole recording is known), frames after t are tried as well, the
+/// nearest first (t-1, t+1, t-2, t+2, ...): a marker hidden from the recording's start is placed.
 bool fillFromNeighbours(const Observations& obs, const Model& model, int t, int i,
-                        Eigen::Vector3d* position_m);
+                        Eigen::Vector3d* position_m, bool later_frames_too = false);
 
 /// A prediction starts at every frame t >= max(first_start, 2) where every free particle has a
 /// start state: seen at t, x(t) with v = (x(t) - x(t-j)) / (j h) for the latest frame t-j at most

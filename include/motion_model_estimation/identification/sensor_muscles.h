@@ -40,8 +40,10 @@
 // from where its own errors took it, and with noisy markers the one-step equations are biased
 // (the noise is in the regressors and, over h^2, in the accelerations). So, after the one-step
 // fit, `rollout_rounds` rounds each run the current model open loop horizon_frames - 1 frames
-// from every `rollout_stride_frames`-th frame where every marker is seen at t-1 and t (a rollout
-// stops when a prediction leaves its marker by more than the data's extent), and at every
+// from every `rollout_stride_frames`-th frame (a marker unseen at t-1 or t placed by the rigid
+// motion of its neighbours from the nearest frame where it was seen, earlier or later: captures
+// whose markers come into view one by one keep their rollouts; a rollout stops when a prediction
+// leaves its marker by more than the data's extent), and at every
 // predicted frame t + k add the equation at the predicted posture and speeds whose target is the
 // data's acceleration at t + k plus a critically damped return to the data, time constant
 // `rollout_correction_frames` (a return in one step asks for drift / h^2: high-gain feedback
@@ -104,6 +106,7 @@ struct SensorMuscleCandidate {
   double validation_rms_m = std::numeric_limits<double>::quiet_NaN();  ///< NaN: failed
   bool bounded = false;  ///< its validation rollout stayed bounded
   int rollout_rounds = 0;  ///< rounds of rollout equations (SensorMuscleOptions::rollout_rounds)
+  int rollout_starts = 0;  ///< the rollouts its last round ran (0 without rounds)
 };
 
 struct SensorMuscleResult {
