@@ -861,8 +861,11 @@ void figure5(const Settings& s) {
       double rms[4] = {NAN, NAN, NAN, NAN};
       bool bounded = false;
       try {
-        const mme::PredictionReport pr =
-            mme::evaluatePredictions(fitted, held, {10}, 10.0, split.held_start);
+        // The sensor muscles' anchors are fixed particles without markers: left unseen.
+        std::vector<std::string> names;
+        for (const mme::Particle& p : fitted.particles) names.push_back(p.name);
+        const mme::PredictionReport pr = mme::evaluatePredictions(
+            fitted, mme::remapMarkers(held, names, nullptr), {10}, 10.0, split.held_start);
         for (const mme::PredictionError& row : pr.rows) rms[static_cast<int>(row.predictor)] = row.rms_m;
         bounded = pr.rollout_bounded;
       } catch (const mme::InputError& e) {

@@ -179,9 +179,10 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
 
   // A long rollout from the first start stays near the data.
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+  // Fixed particles (anchors far away, a floor) stay where they are: the free ones' box.
   for (int t = judged_from; t < frames; ++t)
     for (int i = 0; i < n; ++i)
-      if (!obs.isOccluded(t, i)) {
+      if (!model.particles[i].fixed && !obs.isOccluded(t, i)) {
         lo = lo.cwiseMin(x(t, i));
         hi = hi.cwiseMax(x(t, i));
       }
@@ -192,8 +193,9 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
   report.rollout_bounded = true;
   for (int k = 0; k < report.rollout_frames && report.rollout_bounded; ++k) {
     sim.stepFrame(&s, h);
-    for (const Eigen::Vector3d& p : s.x_m)
-      if (!p.allFinite() || (p - centre).norm() > limit_m) report.rollout_bounded = false;
+    for (int i = 0; i < n; ++i)
+      if (!model.particles[i].fixed && (!s.x_m[i].allFinite() || (s.x_m[i] - centre).norm() > limit_m))
+        report.rollout_bounded = false;
   }
   return report;
 }

@@ -85,7 +85,7 @@ class Fitter {
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
     for (int t = 0; t < data.numFrames(); ++t)
       for (int i = 0; i < n_; ++i)
-        if (!data.isOccluded(t, i)) {
+        if (!passive.particles[i].fixed && !data.isOccluded(t, i)) {
           lo = lo.cwiseMin(data.position(t, i));
           hi = hi.cwiseMax(data.position(t, i));
         }
@@ -573,7 +573,7 @@ class Fitter {
   bool own_spring_nonnegative_;  ///< see solve()
   int n_, s_, m_, k_;
   double h_ = 0.0;
-  double extent_m_ = 0.0;  ///< the data's bounding-box diagonal [m]
+  double extent_m_ = 0.0;  ///< the free particles' bounding-box diagonal over the data [m]
   std::vector<std::vector<int>> partners_;
   bool all_partners_ = false;
   std::vector<std::vector<std::pair<int, double>>> at_;  ///< per particle: (muscle, sign)
@@ -585,19 +585,21 @@ class Fitter {
 /// (2 x 1.6 GB at 14000).
 constexpr size_t kMaxUnknowns = 14000;
 
-Layout chooseLayout(const Model& passive, const Trajectory& data, const SensorMuscleOptions& o) {
+/// Sensors and muscles; `anchor` flags the particles addAnchors added (no sensor, no neighbour).
+Layout chooseLayout(const Model& passive, const Trajectory& data, const std::vector<char>& anchor,
+                    const SensorMuscleOptions& o) {
   const std::vector<PairStats> pairs = pairStatistics(passive, data);
   const int well_seen = static_cast<int>(std::ceil(o.min_seen_share * data.numFrames()));
   Layout layout;
   std::vector<PairStats> ranked;
   for (const PairStats& p : pairs)
-    if (p.seen >= well_seen) ranked.push_back(p);
+    if (p.seen >= well_seen && !anchor[p.a] && !anchor[p.b]) ranked.push_back(p);
   std::stable_sort(ranked.begin(), ranked.end(),
                    [](const PairStats& x, const PairStats& y) { return x.std_m > y.std_m; });
   for (int k = 0; k < o.sensors && k < static_cast<int>(ranked.size()); ++k)
     layout.sensors.push_back(ranked[k]);
-  // Muscles: the model's two-particle bonds with an elongation, the sensor pairs, and every
-  // particle to its nearest neighbours; one muscle per pair.
+  // Muscles: the model's two-particle bonds with an elongation, the sensor pairs, every particle
+  // to its nearest neighbours and to each anchor; one muscle per pair.
   std::set<std::pair<int, int>> taken;
   auto stats = [&](int a, int b) -> const PairStats* {
     if (a > b) std::swap(a, b);
@@ -623,12 +625,75 @@ Layout chooseLayout(const Model& passive, const Trajectory& data, const SensorMu
     if (passive.particles[i].fixed) continue;
     std::vector<std::pair<double, int>> near;
     for (const PairStats& p : pairs)
-      if (p.seen >= well_seen && (p.a == i || p.b == i)) near.push_back({p.mean_m, p.a == i ? p.b : p.a});
+      if (p.seen >= well_seen && (p.a == i || p.b == i) && !anchor[p.a] && !anchor[p.b])
+        near.push_back({p.mean_m, p.a == i ? p.b : p.a});
     std::sort(near.begin(), near.end());
     for (int k = 0; k < o.neighbours && k < static_cast<int>(near.size()); ++k) add(i, near[k].second);
+    for (int a = 0; a < n; ++a)
+      if (anchor[a]) add(i, a);
   }
   return layout;
 }
+
+/// Adds the anchors (see the header) to a copy of the model and of the data: three fixed
+/// particles at the free particles' mean position over the data plus `extents` x their
+/// bounding-box diagonal along x, y and z, seen in every frame. Returns the flags per particle.
+std::vector<char> addAnchors(Model* model, Trajectory* data, double extents) {
+  const int n = static_cast<int>(model->particles.size()), frames = data->numFrames();
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  long seen = 0;
+  for (int t = 0; t < frames; ++t)
+    for (int i = 0; i < n; ++i)
+      if (!model->particles[i].fixed && !data->isOccluded(t, i)) {
+        const Eigen::Vector3d& x = data->position(t, i);
+        sum += x;
+        lo = lo.cwiseMin(x);
+        hi = hi.cwiseMax(x);
+        ++seen;
+      }
+  if (seen == 0) throw InputError("sensor muscles: no free particle is ever seen");
+  const Eigen::Vector3d centre = sum / static_cast<double>(seen);
+  const double distance_m = extents * std::max((hi - lo).norm(), 1e-3);
+  std::set<std::string> names;
+  for (const Particle& p : model->particles) names.insert(p.name);
+  Trajectory out;
+  out.marker_names = data->marker_names;
+  out.frame_rate_hz = data->frame_rate_hz;
+  std::vector<Eigen::Vector3d> at;
+  for (int k = 0; k < 3; ++k) {
+    Particle p;
+    p.name = std::string("anchor_") + "xyz"[k];
+    while (names.count(p.name)) p.name += "_";
+    names.insert(p.name);
+    p.fixed = true;
+    p.position_m = centre + distance_m * Eigen::Vector3d::Unit(k);
+    model->particles.push_back(p);
+    out.marker_names.push_back(p.name);
+    at.push_back(p.position_m);
+  }
+  out.resize(frames);
+  out.times_s = data->times_s;
+  out.frame_numbers = data->frame_numbers;
+  const int m = out.numMarkers();
+  for (int t = 0; t < frames; ++t) {
+    for (int i = 0; i < n; ++i) {
+      out.position(t, i) = data->position(t, i);
+      out.occluded[static_cast<size_t>(t) * m + i] = data->occluded[static_cast<size_t>(t) * n + i];
+    }
+    for (int k = 0; k < 3; ++k) {
+      out.position(t, n + k) = at[k];
+      out.occluded[static_cast<size_t>(t) * m + n + k] = 0;
+    }
+  }
+  *data = std::move(out);
+  std::vector<char> anchor(n + 3, 0);
+  for (int k = 0; k < 3; ++k) anchor[n + k] = 1;
+  return anchor;
+}
+
+SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data,
+                                    const std::vector<char>& anchor, const SensorMuscleOptions& o);
 
 }  // namespace
 
@@ -659,6 +724,8 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
                      std::to_string(o.rollout_stride_frames));
   if (!(o.rollout_correction_frames >= 0.0) || !std::isfinite(o.rollout_correction_frames))
     throw InputError("sensor muscles: the rollout correction time must be a finite number >= 0 frames");
+  if (!(o.anchor_distance_extents >= 1.0) || !std::isfinite(o.anchor_distance_extents))
+    throw InputError("sensor muscles: the anchors' distance must be a finite number >= 1 extent");
   if (!(o.min_seen_share >= 0.0 && o.min_seen_share <= 1.0))
     throw InputError("sensor muscles: min_seen_share must be in [0, 1]");
   if (!(passive.frame_rate_hz > 0.0)) throw InputError("sensor muscles: the model has no frame rate");
@@ -673,6 +740,18 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   for (const ParamRef& ref : freeParameters(passive))
     if (!paramOf(passive, ref).has_value)
       throw InputError("sensor muscles: the passive model's '" + ref.name + "' has no value (identify it first)");
+  if (!o.anchors) return fitSensorMuscles(passive, data, std::vector<char>(n, 0), o);
+  Model anchored = passive;
+  Trajectory anchored_data = data;
+  const std::vector<char> anchor = addAnchors(&anchored, &anchored_data, o.anchor_distance_extents);
+  return fitSensorMuscles(anchored, anchored_data, anchor, o);
+}
+
+namespace {
+
+/// addSensorMuscles on a checked model and data (anchors added when asked).
+SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data,
+                                    const std::vector<char>& anchor, const SensorMuscleOptions& o) {
   const int frames = data.numFrames();
   const int validation_start = static_cast<int>(std::floor((1.0 - o.validation_fraction) * frames));
   if (validation_start < 4 || frames - validation_start < o.horizon_frames + 1)
@@ -682,7 +761,7 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
     if (o.progress) o.progress(line);
   };
 
-  const Layout layout = chooseLayout(passive, data, o);
+  const Layout layout = chooseLayout(passive, data, anchor, o);
   if (layout.sensors.empty())
     throw InputError("sensor muscles: no pair of particles is seen together in " +
                      std::to_string(static_cast<int>(100 * o.min_seen_share)) + " % of the frames");
@@ -852,5 +931,7 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   result.model = fitter.build(theta, o.gain_margin, frames);
   return result;
 }
+
+}  // namespace
 
 }  // namespace mme

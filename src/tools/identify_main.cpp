@@ -29,7 +29,8 @@ const char* kUsage =
     "                [--refine bobyqa|newuoa|praxis|levenberg_marquardt] [--refine-start G]\n"
     "                [--refine-period G] [--select-structure]\n"
     "                [--add-muscles INPUTS] [--muscle-hidden H]\n"
-    "                [--sensor-muscles SENSORS] [--muscle-neighbours K] [--rollout-rounds R]\n";
+    "                [--sensor-muscles SENSORS] [--muscle-neighbours K] [--rollout-rounds R]\n"
+    "                [--muscle-anchors 0|1]\n";
 
 std::string formatMetres(double m) {
   char text[32];
@@ -43,7 +44,7 @@ int run(int argc, char** argv) {
                      "window-frames", "first-frame", "frames", "seed", "threads", "target-cost",
                      "max-time-s", "refine", "refine-start", "refine-period", "preset", "patience", "cost", "segment-frames",
                      "add-muscles", "muscle-hidden", "sensor-muscles", "muscle-neighbours",
-                     "rollout-rounds"},
+                     "rollout-rounds", "muscle-anchors"},
                     {"compare-to-model", "quiet", "help", "select-structure"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -160,7 +161,8 @@ int run(int argc, char** argv) {
   }
 
   const bool sensor_muscles =
-      args.has("sensor-muscles") || args.has("muscle-neighbours") || args.has("rollout-rounds");
+      args.has("sensor-muscles") || args.has("muscle-neighbours") || args.has("rollout-rounds") ||
+      args.has("muscle-anchors");
   mme::SensorMuscleOptions sensor_options;
   if (sensor_muscles) {
     if (compare)
@@ -172,6 +174,7 @@ int run(int argc, char** argv) {
         args.getInt("muscle-neighbours", sensor_options.neighbours, 0, 64));
     sensor_options.rollout_rounds = static_cast<int>(
         args.getInt("rollout-rounds", sensor_options.rollout_rounds, 0, 20));
+    sensor_options.anchors = args.getInt("muscle-anchors", sensor_options.anchors ? 1 : 0, 0, 1) == 1;
     sensor_options.progress = [&](const std::string& line) {
       if (!quiet) std::printf("identify: %s\n", line.c_str());
       std::fflush(stdout);

@@ -29,9 +29,14 @@ Trajectory fitTrajectoryToModel(const char* tool, const std::string& path, const
   for (const Particle& p : model->particles) names.push_back(p.name);
   std::vector<std::string> missing;
   Trajectory trajectory = remapMarkers(data, names, &missing);
-  if (!missing.empty())
-    throw InputError(path + ": marker '" + missing[0] + "' of the model is not in the trajectory (" +
-                     std::to_string(missing.size()) + " missing)");
+  // A fixed particle needs no marker (it stays where the model holds it: sensor muscles'
+  // anchors, a ground point); a free one does.
+  std::vector<std::string> missing_free;
+  for (const std::string& name : missing)
+    if (!model->particles[model->particleIndex(name)].fixed) missing_free.push_back(name);
+  if (!missing_free.empty())
+    throw InputError(path + ": marker '" + missing_free[0] + "' of the model is not in the trajectory (" +
+                     std::to_string(missing_free.size()) + " missing)");
   const int total = trajectory.numFrames();
   const int first = static_cast<int>(args.getInt("first-frame", 0, 0, total - 1));
   long count = args.getInt("frames", total - first, 1, total - first);

@@ -11,7 +11,8 @@
 namespace mme {
 
 /// Reads `path` (.trc, .c3d, or a .bag with MarkerFrame on `topic`), keeps the model's particles
-/// as markers in model order (a particle missing from the file: InputError naming it), keeps the
+/// as markers in model order (a free particle missing from the file: InputError naming it; a
+/// fixed one stays unseen, where the model holds it, e.g. sensor muscles' anchors), keeps the
 /// frames --first-frame / --frames / --window-frames of `args` ask for, and fills in the model's
 /// frame rate from the data when it has none. The reader's warnings and a rate mismatch go to
 /// stderr as "TOOL: warning: ...". With `history` > 0, up to that many frames before

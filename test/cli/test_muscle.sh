@@ -74,7 +74,7 @@ grep -q "inputs: \[" "$tmp/muscled.yaml"
 # Out of range or nothing to place: exit 2 and the reason.
 for bad in "--add-muscles 17|--add-muscles must be" "--muscle-hidden -1|--muscle-hidden must be" \
            "--sensor-muscles 0|--sensor-muscles must be" "--muscle-neighbours 65|--muscle-neighbours must be" \
-           "--rollout-rounds 21|--rollout-rounds must be"; do
+           "--rollout-rounds 21|--rollout-rounds must be" "--muscle-anchors 2|--muscle-anchors must be"; do
   set +e
   "$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/x.yaml" \
     ${bad%%|*} 2>"$tmp/bad3.err" >/dev/null
@@ -87,17 +87,29 @@ done
 # Sensor muscles (--sensor-muscles): on the passive fit, muscles reading the pairs whose distance
 # varies most, fitted by least squares; the ridge is chosen on the last 20 % of the frames and the
 # muscles are written only when they predict those better than the passive model (here they do:
-# the muscle's motion is not passive). The export simulates. (Out-of-range options: above.)
+# the muscle's motion is not passive). With the anchors (the default) each of the 3 free particles
+# also has a muscle to each of three fixed anchor particles far along x, y and z: 6 + 9 muscles.
+# The export simulates, and evaluate judges it on the data, which have no anchor markers (fixed
+# particles need none). (Out-of-range options: above.)
 "$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/sensor.yaml" \
   --cost short_term --sensor-muscles 6 --muscle-neighbours 3 >"$tmp/sensor.log" 2>"$tmp/sensor.err"
-grep -q "^identify: sensor muscles: 6 sensors, 6 muscles, ridge .*; 10 frames ahead on the last frames" "$tmp/sensor.log" ||
+grep -q "^identify: sensor muscles: 6 sensors, 15 muscles, ridge .*; 10 frames ahead on the last frames" "$tmp/sensor.log" ||
   { echo "no sensor-muscle report:"; grep sensor "$tmp/sensor.log"; exit 1; }
-awk '/^identify: sensor muscles: 6 sensors, 6 muscles, ridge/ {
+awk '/^identify: sensor muscles: 6 sensors, 15 muscles, ridge/ {
   for (i = 1; i <= NF; ++i) { if ($i == "frames" && $(i+1) ~ /^[0-9]/) m = $(i+1); if ($i == "(passive") p = $(i+1) }
   printf "muscle: sensor muscles %s m against passive %s m, 10 frames ahead on held-out frames\n", m, p
   exit !(m + 0 > 0 && m + 0 < p + 0) }' "$tmp/sensor.log"
-[ "$(grep -c "kind: muscle" "$tmp/sensor.yaml")" -eq 6 ]
+[ "$(grep -c "kind: muscle" "$tmp/sensor.yaml")" -eq 15 ]
 [ "$(grep -c "name: sensor_" "$tmp/sensor.yaml")" -ge 6 ]
+[ "$(grep -c "name: anchor_[xyz]" "$tmp/sensor.yaml")" -eq 3 ]
 "$bin/simulate" --model "$tmp/sensor.yaml" --frames 20 --out "$tmp/sensor.trc" >/dev/null
+"$bin/evaluate" --model "$tmp/sensor.yaml" --trajectory "$tmp/data.trc" --horizons 10 >"$tmp/sensor_eval.log"
+grep -q "constant_velocity" "$tmp/sensor_eval.log" || { echo "evaluate:"; cat "$tmp/sensor_eval.log"; exit 1; }
+# Without anchors (--muscle-anchors 0): the body's own 6 muscles.
+"$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/sensor0.yaml" \
+  --cost short_term --sensor-muscles 6 --muscle-neighbours 3 --muscle-anchors 0 >"$tmp/sensor0.log" 2>&1
+grep -q "^identify: sensor muscles: 6 sensors, 6 muscles, ridge" "$tmp/sensor0.log" ||
+  { echo "--muscle-anchors 0:"; grep sensor "$tmp/sensor0.log"; exit 1; }
+! grep -q "name: anchor_" "$tmp/sensor0.yaml"
 
 echo "muscle: README example simulated, identified, exported and reloaded; bad definitions refused; muscles placed on a passive fit lower its cost; sensor muscles predict its held-out frames better"

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "motion_model_estimation/core/error.h"
@@ -23,10 +24,13 @@ using mme::Model;
 
 constexpr int kFrames = 300, kFitted = 240, kHorizon = 10;
 
-/// The model's error kHorizon frames ahead on the frames after kFitted.
+/// The model's error kHorizon frames ahead on the frames after kFitted (the data remapped to
+/// the model's particles: the sensor muscles' anchors are fixed particles without markers).
 double heldOutRms(const Model& model, const mme::Trajectory& data, bool* bounded = nullptr) {
+  std::vector<std::string> names;
+  for (const mme::Particle& p : model.particles) names.push_back(p.name);
   const mme::PredictionReport report =
-      mme::evaluatePredictions(model, data, {kHorizon}, 10.0, kFitted);
+      mme::evaluatePredictions(model, mme::remapMarkers(data, names, nullptr), {kHorizon}, 10.0, kFitted);
   if (bounded) *bounded = report.rollout_bounded;
   return mme::test::predictionRms(report, kHorizon, mme::Predictor::kModel);
 }
@@ -207,6 +211,55 @@ TEST(SensorMuscles, RolloutsStartWhereAMarkerIsHidden) {
   ASSERT_GT(whole_starts, 20);
   EXPECT_EQ(rounds(gappy), whole_starts);
   EXPECT_LT(gappy.rows, whole.rows);  // its own rows still drop where it is hidden
+}
+
+TEST(SensorMuscles, AnchorMusclesLearnAPushAlongAWorldAxis) {
+  // The truth adds a push on particle 3 along the vertical (a muscle to a fixed point 30 m
+  // below, its network reading the same bonds): a force of fixed direction in the world, which
+  // muscles between the body's particles can only make by turning with the body. With the
+  // anchors (on by default) every particle has a muscle along x, y and z.
+  Model truth = linearMuscleObject();
+  const int world = mme::test::addParticle(&truth, Eigen::Vector3d(0.05, 0.1, -30.0), 1.0, true);
+  const int push = mme::test::addMuscleType(&truth, "push", 0.0, 29.75, 0.0, 400.0, 2, 0,
+                                            {0.5, -0.4, 0.03, -0.02, 0.0});
+  mme::test::addMuscle(&truth, push, 3, world, {0, 1});
+  const mme::Trajectory simulated = mme::simulateTrajectory(truth, kFrames, truth.frame_rate_hz);
+  const Model passive = mme::removeMuscles(linearMuscleObject());
+  std::vector<std::string> names;
+  for (const mme::Particle& p : passive.particles) names.push_back(p.name);
+  const mme::Trajectory data = mme::remapMarkers(simulated, names, nullptr);
+  const mme::Trajectory fitted = mme::sliceFrames(data, 0, kFitted);
+
+  mme::SensorMuscleOptions without = smallOptions();
+  without.anchors = false;
+  const mme::SensorMuscleResult r0 = mme::addSensorMuscles(passive, fitted, without);
+  const mme::SensorMuscleOptions o = smallOptions();
+  ASSERT_TRUE(o.anchors) << "anchors are the default";
+  const mme::SensorMuscleResult r = mme::addSensorMuscles(passive, fitted, o);
+  // Three anchors, fixed, far along x, y and z from the data's centre; a muscle from each of the
+  // 3 free particles to each.
+  ASSERT_EQ(r.model.particles.size(), passive.particles.size() + 3);
+  EXPECT_EQ(r.muscles, r0.muscles + 9);
+  double lo = 1e300, hi = -1e300;
+  for (int t = 0; t < kFitted; ++t)
+    for (int i = 1; i < 4; ++i) {
+      lo = std::min(lo, fitted.position(t, i).minCoeff());
+      hi = std::max(hi, fitted.position(t, i).maxCoeff());
+    }
+  for (int k = 0; k < 3; ++k) {
+    const mme::Particle& anchor = r.model.particles[passive.particles.size() + k];
+    EXPECT_EQ(anchor.name, std::string("anchor_") + "xyz"[k]);
+    EXPECT_TRUE(anchor.fixed);
+    EXPECT_GT(anchor.position_m[k], hi + 10.0 * (hi - lo)) << anchor.name;
+  }
+  bool bounded = false;
+  const double with_anchors = heldOutRms(r.model, data, &bounded);
+  const double body_only = heldOutRms(r0.model, data);
+  std::printf("push along the vertical, held out %d frames ahead: passive %.3g m, sensor muscles "
+              "without anchors %.3g m, with %.3g m\n", kHorizon, heldOutRms(passive, data), body_only,
+              with_anchors);
+  EXPECT_TRUE(bounded);
+  EXPECT_LT(with_anchors, 0.5 * body_only);
 }
 
 TEST(SensorMuscles, TheWrittenModelMovesAsTheFittedOne) {

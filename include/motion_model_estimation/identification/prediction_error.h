@@ -56,7 +56,8 @@ bool fillFromNeighbours(const Observations& obs, const Model& model, int t, int 
 /// frames place a marker hidden throughout the held-out part). A particle is scored at x(t + K)
 /// when it is seen there and at t-2, t-1 and t (so that every guess is defined, and never from a
 /// filled start), with the same samples for every predictor. The rollout runs rollout_factor x
-/// the judged frames (from first_start - 2) from the first start, bounded by their extent.
+/// the judged frames (from first_start - 2) from the first start, bounded by their extent (the
+/// free particles': fixed ones stay put, seen or not, and may lie far away, like anchors).
 /// `model` carries every free value; `trajectory` has its particles as markers. Throws
 /// InputError on unusable input (no frame rate, horizons < 1, no start).
 PredictionReport evaluatePredictions(const Model& model, const Trajectory& trajectory,

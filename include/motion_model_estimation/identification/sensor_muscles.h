@@ -9,9 +9,20 @@
 // stiffness (it exerts nothing, it only measures) whose rest length is the pair's mean length.
 // Every muscle reads all S sensors (2S network inputs: elongations and their speeds), linear
 // (hidden 0), and has its own type: its own network, stiffness and damping. Muscles sit on the
-// model's two-particle bonds with an elongation, on the sensor pairs, and between every particle
-// and its `neighbours` nearest (mean distance over the data), so that every particle can be
-// pushed in three directions.
+// model's two-particle bonds with an elongation, on the sensor pairs, between every particle
+// and its `neighbours` nearest (mean distance over the data; none by default), and from every
+// particle to each anchor (below), so that every particle can be pushed in three directions.
+//
+// Anchors (`anchors`, on by default): muscles between the body's particles push along lines
+// that turn with the body, but a walk's accelerations live in the world (the body rises and
+// falls, the feet swing forward and land). So three fixed particles, `anchor_x`, `anchor_y` and
+// `anchor_z`, are added at the data's centre plus `anchor_distance_extents` x the data's extent
+// along each axis (far away: the line from any marker to an anchor is that axis within a few
+// degrees), and every free particle gets a muscle to each: with its sensor-reading network it
+// is a push along a world axis driven by the posture. Anchors are never sensors (their distance
+// to a marker is the marker's absolute position along the axis: no posture). A model with them
+// needs no anchor markers in the data (fixed particles stay where the model holds them).
+// Measured on bench_paper fig5's split, 10 frames ahead held out: see the README.
 //
 // With the activation linearised (a = gain tanh(y) ~ gain y, y linear in the network's
 // parameters), a muscle's tension k e + c s + gain y is linear in (k, c, gain w2, gain b2), and so
@@ -69,7 +80,15 @@ namespace mme {
 
 struct SensorMuscleOptions {
   int sensors = 16;          ///< sensor bonds every muscle reads (1..kMaxMuscleInputs)
-  int neighbours = 4;        ///< muscles from each particle to its nearest particles (0..)
+  /// Muscles from each particle to its nearest particles (0..64). 0 by default: the anchors
+  /// push every particle three ways (4 with the anchors: ~9200 unknowns on subject01 against
+  /// 5985, a solve ~3.5x as long; whether it predicts better was not measured to the end).
+  int neighbours = 0;
+  /// Anchor muscles (see above): three fixed anchor particles far along x, y and z, and a muscle
+  /// from every free particle to each.
+  bool anchors = true;
+  /// The anchors' distance from the data's centre, in bounding-box diagonals of the data.
+  double anchor_distance_extents = 20.0;
   /// Candidate windows [frames]: each equation sums the one-step equations of 2 window - 1
   /// frames with triangle weights (see above); 1 is the plain one-step equation. Measured on
   /// the real recordings (bench_paper fig5's split): 5 and 10 did not predict better than 1
