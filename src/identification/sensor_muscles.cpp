@@ -244,6 +244,39 @@ class Fitter {
     return true;
   }
 
+  /// Whether `model` stays near the data when run open loop `rollout_frames` long from `starts`
+  /// frames spread evenly over the data (startState's states): every free particle within
+  /// 10x the data's extent (free particles' box diagonal) of the box's centre, as
+  /// evaluatePredictions bounds its one rollout. A model's instability can depend on where it
+  /// starts; the held-out test starts where the data end.
+  bool boundedFromEverywhere(const Model& model, int starts, int rollout_frames) const {
+    Simulator sim(model);
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (int t = 0; t < data_.numFrames(); ++t)
+      for (int i = 0; i < n_; ++i)
+        if (!passive_.particles[i].fixed && !data_.isOccluded(t, i)) {
+          lo = lo.cwiseMin(data_.position(t, i));
+          hi = hi.cwiseMax(data_.position(t, i));
+        }
+    const Eigen::Vector3d centre = 0.5 * (lo + hi);
+    const double limit_m = 10.0 * extent_m_;
+    const int frames = data_.numFrames();
+    State state;
+    for (int k = 0; k < starts; ++k) {
+      const int t = 1 + static_cast<int>((static_cast<long>(frames - 2) * (k + 1)) / starts);
+      int filled = 0;
+      if (t >= frames || !startState(t, &state, &filled)) continue;
+      for (int step = 0; step < rollout_frames; ++step) {
+        sim.stepFrame(&state, h_);
+        for (int i = 0; i < n_; ++i)
+          if (!passive_.particles[i].fixed &&
+              (!state.x_m[i].allFinite() || (state.x_m[i] - centre).norm() > limit_m))
+            return false;
+      }
+    }
+    return true;
+  }
+
   /// theta for a relative ridge, every muscle's own stiffness and damping >= 0 (when
   /// own_spring_nonnegative_); false when a solve fails. The signs by an active set that only
   /// grows: a negative stiffness or damping is held at 0 and the rest solved again, until none
@@ -585,6 +618,13 @@ class Fitter {
 /// (2 x 1.6 GB at 14000).
 constexpr size_t kMaxUnknowns = 14000;
 
+/// A relative ridge as the progress lines write it ("3e+00").
+std::string formatRidge(double ridge) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.0e", ridge);
+  return text;
+}
+
 /// Sensors and muscles; `anchor` flags the particles addAnchors added (no sensor, no neighbour).
 Layout chooseLayout(const Model& passive, const Trajectory& data, const std::vector<char>& anchor,
                     const SensorMuscleOptions& o) {
@@ -904,25 +944,71 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
                   best = static_cast<int>(result.candidates.size()) - 1;
               });
   }
-  const SensorMuscleCandidate chosen = result.candidates[best];
-  result.chosen = best;
+  // The chosen candidate on every frame: the validation fit's equations plus the rest, and its
+  // rounds of rollout equations run again on every frame. That refit is judged again by its own
+  // 10x rollouts, from the validation start and from 8 frames spread over the data (the last one
+  // near where a held-out test starts): when one leaves the data (a refit can, where the
+  // validation fit did not), the next candidate of the same window (bounded in validation, by
+  // validation error) is refitted instead, up to kMaxFinalFits; when none stays bounded, the
+  // first is kept and reported not better than the passive model.
+  constexpr int kMaxFinalFits = 4;
+  constexpr int kFinalRolloutStarts = 8;
+  const int window = result.candidates[best].window_frames;
+  System& sys = best_sys;
+  fitter.accumulate(window, validation_start - window, frames, &sys);
+  std::vector<int> order = {best};
+  for (int k = 0; k < static_cast<int>(result.candidates.size()); ++k) {
+    const SensorMuscleCandidate& c = result.candidates[k];
+    if (k != best && c.window_frames == window && c.bounded && std::isfinite(c.validation_rms_m))
+      order.push_back(k);
+  }
+  std::stable_sort(order.begin() + 1, order.end(), [&](int a, int b) {
+    return result.candidates[a].validation_rms_m < result.candidates[b].validation_rms_m;
+  });
+  if (static_cast<int>(order.size()) > kMaxFinalFits) order.resize(kMaxFinalFits);
+  Eigen::VectorXd theta, first_theta;
+  bool final_bounded = false;
+  int accepted = best;
+  for (int index : order) {
+    const SensorMuscleCandidate& c = result.candidates[index];
+    Eigen::VectorXd t;
+    if (!fitter.solve(sys, c.ridge, &t)) continue;
+    if (c.rollout_rounds > 0) {
+      say("sensor muscles: ridge " + formatRidge(c.ridge) + ", " + std::to_string(c.rollout_rounds) +
+          " rollout round(s) on every frame");
+      if (!runRounds(sys, c.ridge, t, frames, frames, c.rollout_rounds,
+                     [&](int, const Eigen::VectorXd& r, const Fitter::RolloutCount&) { t = r; }))
+        continue;
+    }
+    if (first_theta.size() == 0) first_theta = t;
+    double rms = 0.0;
+    bool bounded = false;
+    try {
+      const Model model = fitter.build(t, o.gain_margin, frames);
+      judge(model, &rms, nullptr, &bounded);
+      bounded = bounded && fitter.boundedFromEverywhere(model, kFinalRolloutStarts,
+                                                        10 * (frames - validation_start + 2));
+    } catch (const InputError&) {
+    }
+    if (bounded) {
+      theta = t;
+      accepted = index;
+      final_bounded = true;
+      break;
+    }
+    say("sensor muscles: ridge " + formatRidge(c.ridge) + ", " + std::to_string(c.rollout_rounds) +
+        " rollout round(s), refitted on every frame: a 10x rollout of it (from the validation "
+        "start or from one of 8 frames over the data) leaves the data; the next candidate");
+  }
+  if (first_theta.size() == 0) throw InputError("sensor muscles: the final solve failed");
+  if (!final_bounded) theta = first_theta;
+  const SensorMuscleCandidate chosen = result.candidates[accepted];
+  result.chosen = accepted;
   result.window_frames = chosen.window_frames;
   result.ridge = chosen.ridge;
   result.validation_rms_m = chosen.validation_rms_m;
-  result.better_than_passive = chosen.bounded && chosen.validation_rms_m < result.passive_rms_m;
-
-  // The chosen candidate on every frame: the validation fit's equations plus the rest, and its
-  // rounds of rollout equations run again on every frame.
-  System& sys = best_sys;
-  fitter.accumulate(chosen.window_frames, validation_start - chosen.window_frames, frames, &sys);
-  Eigen::VectorXd theta;
-  if (!fitter.solve(sys, result.ridge, &theta)) throw InputError("sensor muscles: the final solve failed");
-  if (chosen.rollout_rounds > 0) {
-    say("sensor muscles: " + std::to_string(chosen.rollout_rounds) + " rollout rounds on every frame");
-    if (!runRounds(sys, chosen.ridge, theta, frames, frames, chosen.rollout_rounds,
-                   [&](int, const Eigen::VectorXd& t, const Fitter::RolloutCount&) { theta = t; }))
-      throw InputError("sensor muscles: the final solve failed");
-  }
+  result.better_than_passive =
+      final_bounded && chosen.bounded && chosen.validation_rms_m < result.passive_rms_m;
   result.rows = sys.rows;
   // A row sums window^2 frames' a h^2 (the triangle's weights): per frame, divided by that.
   const double per_frame = 1.0 / (passive.frame_rate_hz * passive.frame_rate_hz *

@@ -141,7 +141,9 @@ struct SensorMuscleResult {
   double passive_rms_m = 0.0;            ///< the passive model on the same validation frames
   double constant_velocity_rms_m = 0.0;  ///< the constant-velocity guess there
   /// The chosen fit predicted the validation frames better than the passive model, its rollout
-  /// bounded; when false, keep the passive model.
+  /// bounded, and its refit on every frame stays bounded over 10x rollouts from the validation
+  /// start and from 8 frames spread over the data (a refit that does not is replaced by the next
+  /// candidate, up to 4 tried); when false, keep the passive model.
   bool better_than_passive = false;
   /// The final fit's residual per frame, a h^2 [m] (a window's row divided by window^2).
   double residual_rms_m = 0.0;
