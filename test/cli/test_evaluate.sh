@@ -2,7 +2,8 @@
 # evaluate: the identified paper_object predicts held-out frames (not the ones it was identified
 # on) better than the three model-free guesses at 1, 5 and 10 frames; the CSV has the columns
 # horizon,predictor,rms_m and one row per horizon and predictor; a marker hidden through the
-# judged frames is placed from --history frames; bad options give exit 2.
+# judged frames is placed from --history frames; a fixed particle needs no marker, a free one
+# does; bad options give exit 2.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/../.." && pwd)
 source "$here/scripts/env.sh"
@@ -36,6 +37,17 @@ awk -F'\t' 'BEGIN { OFS = "\t" } NR > 5 && $1 + 0 >= 100 { $3 = ""; $4 = ""; $5 
 grep -q "80 frames x 15 markers at 100 Hz (20 of them history), 59 prediction starts (59 particle starts filled" "$tmp/gap.log" ||
   { echo "history: unexpected"; cat "$tmp/gap.log"; exit 1; }
 
+# A fixed particle needs no marker (it stays where the model holds it: sensor muscles' anchors);
+# with nothing bonded to it the figures are the same. A free particle without one is an error.
+sed 's/^particles:$/particles:\n  - {name: ground, mass: 1, position: [0, 0, -5], fixed: true}/' \
+  "$tmp/identified.yaml" >"$tmp/anchored.yaml"
+grep -q "name: ground" "$tmp/anchored.yaml"
+"$bin/evaluate" --model "$tmp/anchored.yaml" --trajectory "$tmp/data.trc" --first-frame 100 \
+  --csv "$tmp/anchored.csv" >/dev/null
+cmp "$tmp/out.csv" "$tmp/anchored.csv" || { echo "a markerless fixed particle changed the figures"; exit 1; }
+sed 's/^particles:$/particles:\n  - {name: ghost, mass: 1, position: [0, 0, -5], fixed: false}/' \
+  "$tmp/identified.yaml" >"$tmp/ghost.yaml"
+
 expect_exit2() {  # expect_exit2 PATTERN ARGS...
   local pattern=$1; shift
   set +e; "$bin/evaluate" "$@" 2>"$tmp/err" >/dev/null; local rc=$?; set -e
@@ -48,4 +60,5 @@ expect_exit2 "--trajectory is required" --model "$tmp/identified.yaml"
 expect_exit2 "nothing to predict from (--history H" --model "$tmp/identified.yaml" --trajectory "$tmp/gap.trc" --first-frame 100
 expect_exit2 "option --history must be an integer" --model "$tmp/identified.yaml" --trajectory "$tmp/gap.trc" --history -1
 expect_exit2 "nope.trc" --model "$tmp/identified.yaml" --trajectory "$tmp/nope.trc"
+expect_exit2 "marker 'ghost' of the model is not in the trajectory" --model "$tmp/ghost.yaml" --trajectory "$tmp/data.trc"
 echo "test_evaluate: ok"
