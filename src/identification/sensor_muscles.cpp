@@ -90,6 +90,7 @@ class Fitter {
           hi = hi.cwiseMax(data.position(t, i));
         }
     extent_m_ = lo.allFinite() && hi.allFinite() ? std::max((hi - lo).norm(), 1e-3) : 1e-3;
+    centre_m_ = lo.allFinite() && hi.allFinite() ? Eigen::Vector3d(0.5 * (lo + hi)) : Eigen::Vector3d::Zero();
   }
 
   int unknowns() const { return m_ * k_; }
@@ -251,14 +252,6 @@ class Fitter {
   /// starts; the held-out test starts where the data end.
   bool boundedFromEverywhere(const Model& model, int starts, int rollout_frames) const {
     Simulator sim(model);
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-    for (int t = 0; t < data_.numFrames(); ++t)
-      for (int i = 0; i < n_; ++i)
-        if (!passive_.particles[i].fixed && !data_.isOccluded(t, i)) {
-          lo = lo.cwiseMin(data_.position(t, i));
-          hi = hi.cwiseMax(data_.position(t, i));
-        }
-    const Eigen::Vector3d centre = 0.5 * (lo + hi);
     const double limit_m = 10.0 * extent_m_;
     const int frames = data_.numFrames();
     State state;
@@ -270,7 +263,7 @@ class Fitter {
         sim.stepFrame(&state, h_);
         for (int i = 0; i < n_; ++i)
           if (!passive_.particles[i].fixed &&
-              (!state.x_m[i].allFinite() || (state.x_m[i] - centre).norm() > limit_m))
+              (!state.x_m[i].allFinite() || (state.x_m[i] - centre_m_).norm() > limit_m))
             return false;
       }
     }
@@ -607,6 +600,7 @@ class Fitter {
   int n_, s_, m_, k_;
   double h_ = 0.0;
   double extent_m_ = 0.0;  ///< the free particles' bounding-box diagonal over the data [m]
+  Eigen::Vector3d centre_m_ = Eigen::Vector3d::Zero();  ///< that box's centre [m]
   std::vector<std::vector<int>> partners_;
   bool all_partners_ = false;
   std::vector<std::vector<std::pair<int, double>>> at_;  ///< per particle: (muscle, sign)
@@ -811,7 +805,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
     throw InputError("sensor muscles: " + std::to_string(layout.muscles.size()) + " muscles reading " +
                      std::to_string(layout.sensors.size()) + " sensors are " + std::to_string(unknowns) +
                      " unknowns, more than " + std::to_string(kMaxUnknowns) +
-                     " (two dense matrices of that size): fewer sensors or neighbours");
+                     " (two dense matrices of that size): fewer sensors or neighbours, or no anchors");
   Fitter fitter(passive, data, layout, o.nonnegative_own_spring);
   SensorMuscleResult result;
   result.sensors = static_cast<int>(layout.sensors.size());

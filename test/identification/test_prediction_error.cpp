@@ -103,16 +103,21 @@ mme::Model freeParticles(int n) {
   return m;
 }
 
+/// `data` with marker 0 hidden in frames [from, to), its hidden positions garbage.
+mme::Trajectory hideFirstMarker(mme::Trajectory data, int from, int to) {
+  for (int t = from; t < to; ++t) {
+    data.occluded[t * data.numMarkers()] = 1;
+    data.position(t, 0) = Eigen::Vector3d(7, 7, 7);
+  }
+  return data;
+}
+
 // A marker hidden for 20 frames is placed exactly where the rigid body carries it, from earlier
 // frames only; fewer than 3 neighbours seen, or neighbours on one line, place nothing.
 TEST(PredictionError, AnUnseenMarkerIsPlacedByItsNeighboursRigidMotion) {
   const mme::Model model = freeParticles(5);
   const mme::Trajectory truth = rigidMotion(60);
-  mme::Trajectory data = truth;
-  for (int t = 20; t < 40; ++t) {
-    data.occluded[t * 5] = 1;
-    data.position(t, 0) = Eigen::Vector3d(7, 7, 7);
-  }
+  const mme::Trajectory data = hideFirstMarker(truth, 20, 40);
   const mme::Observations obs = mme::prepareObservations(model, data);
   for (int t = 20; t < 40; ++t) {
     Eigen::Vector3d p;
@@ -144,11 +149,7 @@ TEST(PredictionError, AnUnseenMarkerIsPlacedByItsNeighboursRigidMotion) {
 TEST(PredictionError, AMarkerHiddenFromTheStartIsPlacedFromLaterFrames) {
   const mme::Model model = freeParticles(5);
   const mme::Trajectory truth = rigidMotion(60);
-  mme::Trajectory data = truth;
-  for (int t = 0; t < 20; ++t) {
-    data.occluded[t * 5] = 1;
-    data.position(t, 0) = Eigen::Vector3d(7, 7, 7);
-  }
+  const mme::Trajectory data = hideFirstMarker(truth, 0, 20);
   const mme::Observations obs = mme::prepareObservations(model, data);
   for (int t = 0; t < 20; ++t) {
     Eigen::Vector3d p;
