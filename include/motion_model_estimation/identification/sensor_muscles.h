@@ -41,7 +41,10 @@
 // better). The window and ridge are chosen by holding out the data's last
 // `validation_fraction`: each candidate is fitted on the frames before and judged by the
 // open-loop prediction `horizon_frames` ahead on the held-out ones (evaluatePredictions, its
-// rollout bounded first); the chosen one is refitted on every frame. The gain is then set to
+// rollout bounded first); the chosen one is refitted on every frame, and that refit is run 10x
+// the validation frames open loop from the validation start and from 8 frames spread over the
+// data: when one of those rollouts leaves the data (a refit can, where the validation fit did
+// not), the next candidate is refitted instead (up to 4). The gain is then set to
 // `gain_margin` times the largest linear activation over the fitted frames and the weights
 // divided by it, so tanh stays within 0.4 % of linear where the data went (and bounds the
 // activation beyond).
