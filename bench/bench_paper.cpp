@@ -819,6 +819,10 @@ void figure5(const Settings& s) {
         const auto began = std::chrono::steady_clock::now();
         const mme::SensorMuscleResult sr = mme::addSensorMuscles(dampers_fit, fit, sm);
         wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+        std::printf("fig5: %s: sensor muscles chosen: ridge %.0e, %d rollout round(s), activation "
+                    "time constant %g s%s\n", c.name.c_str(), sr.ridge,
+                    sr.candidates[sr.chosen].rollout_rounds, sr.activation_time_s,
+                    sr.better_than_passive ? "" : " (not better than the passive model)");
         fitted = sr.model;
         parameters = mme::freeParameters(dampers_fit).size() + sr.unknowns;
         cost_m2 = sr.residual_rms_m * sr.residual_rms_m;

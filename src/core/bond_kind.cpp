@@ -18,7 +18,8 @@ BondKindInfo makeInfo(BondKind kind) {
     case BondKind::kViscosity:
       return {kind, "viscosity", 1, {kViscosity}, false, false, false};
     case BondKind::kMuscle:
-      return {kind, "muscle", 2, {kStiffness, kRestLength, kDamping, kGain}, true, false, true};
+      return {kind, "muscle", 2, {kStiffness, kRestLength, kDamping, kGain, kActivationTime},
+              true, false, true};
     case BondKind::kFloor:  // a conditional bond to the floor plane: ground contact
       return {kind, "floor", 1, {kStiffness, kDamping, kFriction, kHeight}, false, false, false};
   }
@@ -56,6 +57,7 @@ const char* paramKey(ParamId id) {
     case kGain: return "gain";
     case kFriction: return "friction";
     case kHeight: return "height";
+    case kActivationTime: return "activation_time_constant";
     case kParamCount: break;
   }
   return "?";

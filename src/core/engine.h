@@ -57,6 +57,7 @@ struct InputBond {
 /// LawTable::network.
 struct MuscleTypeLaw {
   double gain_n = 0.0;
+  double activation_time_s = 0.0;  // > 0: the activation is a state (Simulator, State)
   int32_t hidden = 0;  // the input count is the bond's (validateModel: the type's)
   uint32_t network_offset = 0;
 };
@@ -264,14 +265,20 @@ class Engine {
   size_t numSprings() const { return spring_pairs_.size(); }
   size_t numFlexions() const { return flexions_.size(); }
   size_t numMuscles() const { return muscles_.size(); }
+  /// The muscles in bond order (the order of State::activation_n).
+  const std::vector<MuscleBond>& muscles() const { return muscles_; }
   const std::vector<uint8_t>& fixed() const { return fixed_; }
 
   /// f = gravity + unary viscosity + installed springs + flexion + muscles + floor contacts + the
   /// given interaction runs
   /// (pairs[run.begin..run.end) with law inter_laws[run.law]).
+  /// A muscle's activation is its network's output (its excitation) unless `activation_n` is
+  /// given and its type has an activation time constant: then activation_n[k] (k: the muscle's
+  /// index in bond order). `excitation_n`, when given, receives every muscle's excitation.
   void forces(const LawTable& laws, const double* x, const double* v, double* f,
               const SpringLaw* inter_laws, const PairIdx* inter_pairs,
-              const SpringRun* inter_runs, size_t num_inter_runs) const;
+              const SpringRun* inter_runs, size_t num_inter_runs,
+              const double* activation_n = nullptr, double* excitation_n = nullptr) const;
   /// Semi-implicit Euler on free particles: v += dt F/m; x += dt v. Fixed ones keep x and v.
   void integrate(double dt_s, const double* f, double* x, double* v) const;
   /// Provot: one pass in bond order over springs whose type has max_elongation.
@@ -294,7 +301,8 @@ class Engine {
   std::vector<MuscleBond> muscles_;      // in bond order
   std::vector<InputBond> muscle_inputs_;
 
-  void muscleForces(const LawTable& laws, const double* x, const double* v, double* f) const;
+  void muscleForces(const LawTable& laws, const double* x, const double* v, double* f,
+                    const double* activation_n, double* excitation_n) const;
 };
 
 }  // namespace detail

@@ -197,6 +197,9 @@ std::string validateModel(const Model& model) {
       const std::string reason = check(type.params[id], paramKey(id));
       if (!reason.empty()) return reason;
     }
+    const Param& tau = type.params[kActivationTime];
+    if (tau.present && tau.has_value && tau.value < 0.0)
+      return "bond type '" + type.name + "': activation_time_constant must be >= 0 [s] (0: none)";
     if (!bondKindInfo(type.kind).network) {
       if (!type.network.empty() || type.network_inputs != 0 || type.network_hidden != 0)
         return "bond type '" + type.name + "': only muscles have a network";

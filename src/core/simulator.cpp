@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <Eigen/Cholesky>
+
 #include "engine.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/muscle.h"
@@ -73,6 +75,7 @@ void LawTable::load(const Model& model) {
     max_elongation[t] = type.value(kMaxElongation);
     MuscleTypeLaw& m = muscle[t];
     m.gain_n = type.value(kGain);
+    m.activation_time_s = type.value(kActivationTime);
     m.hidden = type.network_hidden;
     m.network_offset = static_cast<uint32_t>(network.size());
     for (const Param& p : type.network) network.push_back(p.present ? p.value : 0.0);
@@ -110,6 +113,7 @@ void LawTable::set(const ParamRef& ref, double value) {
     case kGain: muscle[t].gain_n = value; break;
     case kFriction: fc.friction = value; break;
     case kHeight: fc.height = value; break;
+    case kActivationTime: muscle[t].activation_time_s = value; break;
     case kParamCount: break;  // not a parameter (network parameters are handled above)
   }
 }
@@ -170,10 +174,11 @@ Engine::Engine(const Model& model) {
   }
 }
 
-void Engine::muscleForces(const LawTable& laws, const double* x, const double* v,
-                          double* f) const {
+void Engine::muscleForces(const LawTable& laws, const double* x, const double* v, double* f,
+                          const double* activation_n, double* excitation_n) const {
   double z[2 * kMaxMuscleInputs];  // validateModel bounds the input count
-  for (const MuscleBond& m : muscles_) {
+  for (size_t index = 0; index < muscles_.size(); ++index) {
+    const MuscleBond& m = muscles_[index];
     const MuscleTypeLaw& law = laws.muscle[m.type];
     const int n_in = static_cast<int>(m.input_end - m.input_begin);
     for (int k = 0; k < n_in; ++k) {
@@ -182,16 +187,20 @@ void Engine::muscleForces(const LawTable& laws, const double* x, const double* v
       elongationRaw(laws.spring[ib.type].rest_length, x + a, x + b, v + a, v + b, &z[k],
                     &z[n_in + k]);
     }
-    const double activation_n = muscleActivation(laws.network.data() + law.network_offset,
-                                                 n_in, law.hidden, law.gain_n, z);
+    const double excitation = muscleActivation(laws.network.data() + law.network_offset, n_in,
+                                               law.hidden, law.gain_n, z);
+    if (excitation_n) excitation_n[index] = excitation;
+    const double activation =
+        activation_n && law.activation_time_s > 0.0 ? activation_n[index] : excitation;
     const int a = 3 * m.a, b = 3 * m.b;
-    musclePair(laws.spring[m.type], activation_n, x + a, x + b, v + a, v + b, f + a, f + b);
+    musclePair(laws.spring[m.type], activation, x + a, x + b, v + a, v + b, f + a, f + b);
   }
 }
 
 void Engine::forces(const LawTable& laws, const double* x, const double* v, double* f,
                     const SpringLaw* inter_laws, const PairIdx* inter_pairs,
-                    const SpringRun* inter_runs, size_t num_inter_runs) const {
+                    const SpringRun* inter_runs, size_t num_inter_runs,
+                    const double* activation_n, double* excitation_n) const {
   const double gx = laws.gravity_mps2[0], gy = laws.gravity_mps2[1], gz = laws.gravity_mps2[2];
   for (int i = 0; i < n_; ++i) {
     const double m = mass_[i];
@@ -213,7 +222,7 @@ void Engine::forces(const LawTable& laws, const double* x, const double* v, doub
     flexionForceRaw(laws.flexion[b.type], x + a, x + m, x + c, v + a, v + m, v + c, f + a, f + m,
                     f + c);
   }
-  if (!muscles_.empty()) muscleForces(laws, x, v, f);
+  if (!muscles_.empty()) muscleForces(laws, x, v, f, activation_n, excitation_n);
   for (const UnaryBond& u : floors_) {
     const int p = 3 * u.p;
     floorForceRaw(laws.floor[u.type], x + p, v + p, f + p);
@@ -318,11 +327,27 @@ struct Simulator::Impl {
     last_count = inter_pairs.size();
   }
 
+  /// Some muscle's type has an activation time constant: states carry activations.
+  bool activation_state = false;
+  std::vector<double> excitation;  // every muscle's network output at the last forces()
+
+  void updateActivationState() {
+    activation_state = false;
+    for (const detail::MuscleBond& m : engine.muscles())
+      if (laws.muscle[m.type].activation_time_s > 0.0) activation_state = true;
+    excitation.assign(engine.numMuscles(), 0.0);
+  }
+
+  /// Forces at s; a state without activations (or one of another model) has its muscles at
+  /// their excitation.
   void forces(const State& s) {
     findInteractions(s.x_m);
     f.resize(3 * static_cast<size_t>(engine.numParticles()));
-    engine.forces(laws, flat(s.x_m), flat(s.v_mps), f.data(),
-                  laws.spring.data(), inter_pairs.data(), inter_runs.data(), inter_runs.size());
+    const bool carried = activation_state && s.activation_n.size() == engine.numMuscles();
+    engine.forces(laws, flat(s.x_m), flat(s.v_mps), f.data(), laws.spring.data(),
+                  inter_pairs.data(), inter_runs.data(), inter_runs.size(),
+                  carried ? s.activation_n.data() : nullptr,
+                  activation_state ? excitation.data() : nullptr);
   }
 };
 
@@ -346,13 +371,17 @@ Simulator::Simulator(const Model& model) : impl_(new Impl) {
     }
     impl_->inters.push_back(std::move(c));
   }
+  impl_->updateActivationState();
 }
 
 Simulator::~Simulator() = default;
 Simulator::Simulator(Simulator&&) noexcept = default;
 Simulator& Simulator::operator=(Simulator&&) noexcept = default;
 
-void Simulator::setParameters(const Model& model) { impl_->laws.load(model); }
+void Simulator::setParameters(const Model& model) {
+  impl_->laws.load(model);
+  impl_->updateActivationState();
+}
 
 State Simulator::initialState() const { return impl_->initial; }
 
@@ -370,10 +399,75 @@ void Simulator::step(State* s, double dt_s) {
   const size_t n = static_cast<size_t>(impl_->engine.numParticles());
   if (s->x_m.size() != n || s->v_mps.size() != n)
     throw std::invalid_argument("Simulator: state size differs from the particle count");
+  const size_t muscles = impl_->engine.numMuscles();
+  if (impl_->activation_state && s->activation_n.size() != muscles) {
+    // A state without activations starts with every muscle at rest: at its excitation.
+    s->activation_n.clear();
+    impl_->forces(*s);
+    s->activation_n = impl_->excitation;
+  }
   impl_->forces(*s);
   double* x = flat(s->x_m);
   impl_->engine.integrate(dt_s, impl_->f.data(), x, flat(s->v_mps));
   impl_->engine.clamp(impl_->laws, x);
+  if (!impl_->activation_state) return;
+  // Activation dynamics, exact for the excitation held over the substep:
+  // a <- u + (a - u) exp(-dt / tau); a muscle without a time constant follows u at once.
+  const std::vector<detail::MuscleBond>& bonds = impl_->engine.muscles();
+  for (size_t k = 0; k < muscles; ++k) {
+    const double tau_s = impl_->laws.muscle[bonds[k].type].activation_time_s;
+    const double u = impl_->excitation[k];
+    double& a = s->activation_n[k];
+    a = tau_s > 0.0 ? u + (a - u) * std::exp(-dt_s / tau_s) : u;
+  }
+}
+
+bool Simulator::hasActivationState() const { return impl_->activation_state; }
+
+int Simulator::estimateActivations(State* s, const std::vector<Eigen::Vector3d>& acceleration_mps2,
+                                   const std::vector<char>& known) {
+  const size_t n = static_cast<size_t>(impl_->engine.numParticles());
+  if (s->x_m.size() != n || s->v_mps.size() != n || acceleration_mps2.size() != n ||
+      known.size() != n)
+    throw std::invalid_argument("Simulator: state or acceleration size differs from the particle count");
+  s->activation_n.clear();
+  if (!impl_->activation_state) return 0;
+  impl_->forces(*s);  // every muscle at its excitation: the forces to be corrected
+  const std::vector<detail::MuscleBond>& bonds = impl_->engine.muscles();
+  std::vector<int> row_of(n, -1);
+  int rows = 0;
+  for (size_t i = 0; i < n; ++i)
+    if (known[i] && !impl_->engine.fixed()[i] && acceleration_mps2[i].allFinite()) row_of[i] = 3 * rows++;
+  std::vector<size_t> columns;  // the muscles with an activation state
+  for (size_t k = 0; k < bonds.size(); ++k)
+    if (impl_->laws.muscle[bonds[k].type].activation_time_s > 0.0) columns.push_back(k);
+  s->activation_n = impl_->excitation;
+  if (rows == 0 || columns.empty()) return 0;
+  // The rest of each seen particle's observed m a, and each activation's force on it.
+  Eigen::VectorXd r(3 * rows);
+  for (size_t i = 0; i < n; ++i)
+    if (row_of[i] >= 0)
+      for (int c = 0; c < 3; ++c)
+        r(row_of[i] + c) = impl_->mass[i] * acceleration_mps2[i][c] - impl_->f[3 * i + c];
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(3 * rows, static_cast<Eigen::Index>(columns.size()));
+  for (size_t j = 0; j < columns.size(); ++j) {
+    const detail::MuscleBond& m = bonds[columns[j]];
+    const Eigen::Vector3d d = s->x_m[m.b] - s->x_m[m.a];
+    const double l = d.norm();
+    if (!(l > 0.0)) continue;
+    const Eigen::Vector3d u = d / l;  // a positive activation pulls a towards b and b towards a
+    if (row_of[m.a] >= 0) a.block<3, 1>(row_of[m.a], static_cast<Eigen::Index>(j)) += u;
+    if (row_of[m.b] >= 0) a.block<3, 1>(row_of[m.b], static_cast<Eigen::Index>(j)) -= u;
+  }
+  // The least change of the activations that explains the rest (minimum norm; a tiny ridge
+  // keeps rows no muscle reaches from making the system singular).
+  Eigen::MatrixXd g = a * a.transpose();
+  const double ridge = 1e-9 * std::max(g.trace() / g.rows(), 1e-300);
+  g.diagonal().array() += ridge;
+  const Eigen::VectorXd delta = a.transpose() * g.ldlt().solve(r);
+  if (!delta.allFinite()) return 0;
+  for (size_t j = 0; j < columns.size(); ++j) s->activation_n[columns[j]] += delta(static_cast<Eigen::Index>(j));
+  return static_cast<int>(columns.size());
 }
 
 void Simulator::stepFrame(State* s, double frame_period_s) {

@@ -133,6 +133,31 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
     if (!usable) continue;
     ++report.starts;
     report.filled += filled;
+    // Muscles with activation dynamics start where the data's motion puts them: at t - 1 (its
+    // velocity from t - 2), the activations that explain each particle's acceleration
+    // x(t) - 2 x(t-1) + x(t-2) over h^2 (particles seen in those three frames; the constant-
+    // acceleration guess's), then one frame of their dynamics to t. The others are placed at
+    // t - 1 by their start velocity.
+    s.activation_n.clear();
+    if (sim.hasActivationState()) {
+      State before = s;
+      std::vector<Eigen::Vector3d> acceleration(n, Eigen::Vector3d::Zero());
+      std::vector<char> known(n, 0);
+      for (int i = 0; i < n; ++i) {
+        if (model.particles[i].fixed) continue;
+        if (!obs.isOccluded(t, i) && !obs.isOccluded(t - 1, i) && !obs.isOccluded(t - 2, i)) {
+          before.x_m[i] = x(t - 1, i);
+          before.v_mps[i] = (x(t - 1, i) - x(t - 2, i)) / h;
+          acceleration[i] = (x(t, i) - 2.0 * x(t - 1, i) + x(t - 2, i)) / (h * h);
+          known[i] = 1;
+        } else {
+          before.x_m[i] = s.x_m[i] - h * s.v_mps[i];
+        }
+      }
+      sim.estimateActivations(&before, acceleration, known);
+      sim.stepFrame(&before, h);
+      s.activation_n = before.activation_n;
+    }
     // The model's open-loop motion from the start, up to the longest horizon in reach.
     const int reach = std::min(max_k, frames - 1 - t);
     if (first_state.x_m.empty()) first_state = s;

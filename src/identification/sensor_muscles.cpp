@@ -220,6 +220,7 @@ class Fitter {
   /// (fillFromNeighbours; `filled` counts these), as evaluatePredictions fills its starts; a
   /// fixed one where the model holds it when unseen. False when a particle cannot be placed.
   bool startState(int t, State* state, int* filled) const {
+    state->activation_n.clear();
     state->x_m.assign(n_, Eigen::Vector3d::Zero());
     state->v_mps.assign(n_, Eigen::Vector3d::Zero());
     for (int i = 0; i < n_; ++i) {
@@ -319,7 +320,8 @@ class Fitter {
 
   /// The passive model with sensors and muscles carrying theta (scaled columns), every gain
   /// `margin` x its muscle's largest linear activation over frames [0, t_end).
-  Model build(const Eigen::VectorXd& theta, double margin, int t_end) const {
+  Model build(const Eigen::VectorXd& theta, double margin, int t_end,
+              double activation_time_s = 0.0) const {
     Model model = passive_;
     std::set<std::string> type_names, bond_names;
     for (const BondType& type : model.bond_types) type_names.insert(type.name);
@@ -377,6 +379,7 @@ class Fitter {
       type.param(kRestLength) = fixed(pair.mean_m);
       type.param(kDamping) = fixed(th(2 * s_ + 2) / s_scale_[m]);
       type.param(kGain) = fixed(gain);
+      if (activation_time_s > 0.0) type.param(kActivationTime) = fixed(activation_time_s);
       type.network_inputs = s_;
       type.network_hidden = 0;
       type.network.assign(muscleNetworkSize(s_, 0), Param{});
@@ -833,7 +836,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
   int best = -1;
   bool any_rows = false;
   System best_sys;  // the equations of the best candidate's window, to be completed below
-  std::vector<Eigen::VectorXd> thetas;  // per one-step candidate, its fit (empty: the solve failed)
+  std::vector<Eigen::VectorXd> thetas;  // per candidate, its validation fit (empty: the solve failed)
   for (int window : o.windows_frames) {
     System sys;
     fitter.accumulate(window, 0, validation_start - window, &sys);
@@ -924,6 +927,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
                 if (!std::isfinite(c.validation_rms_m)) c.bounded = false;
                 char line[240];
                 c.rollout_starts = count.starts;
+                thetas.push_back(theta);
                 std::snprintf(line, sizeof(line), "sensor muscles: ridge %.0e, rollout round %d (%d "
                               "rollouts, %d from a filled marker, %d stopped off the data): %d frames "
                               "ahead on the last %d frames %.2f mm, rollout %s", c.ridge, round,
@@ -947,6 +951,38 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
   // first is kept and reported not better than the passive model.
   constexpr int kMaxFinalFits = 4;
   constexpr int kFinalRolloutStarts = 8;
+  // A candidate's activation time constant: its validation fit run with each of the options'
+  // time constants (its starts' activations estimated from the data, evaluatePredictions),
+  // the bounded one with the lowest error kept (0, none, when none beats the fit without).
+  const double frame_period_s = 1.0 / passive.frame_rate_hz;
+  struct Activation {
+    double time_s = 0.0;
+    double validation_rms_m = 0.0;
+  };
+  auto chooseActivation = [&](int index) {
+    const SensorMuscleCandidate& c = result.candidates[index];
+    Activation chosen{0.0, c.validation_rms_m};
+    if (thetas[index].size() == 0) return chosen;
+    for (double tau_frames : o.activation_times_frames) {
+      if (!(tau_frames > 0.0)) continue;
+      double rms = std::nan("");
+      bool bounded = false;
+      try {
+        judge(fitter.build(thetas[index], o.gain_margin, validation_start, tau_frames * frame_period_s),
+              &rms, nullptr, &bounded);
+      } catch (const InputError&) {
+      }
+      char line[240];
+      std::snprintf(line, sizeof(line), "sensor muscles: ridge %.0e, %d rollout round(s), activation "
+                    "time constant %g frames: %d frames ahead on the last %d frames %.2f mm, rollout %s",
+                    c.ridge, c.rollout_rounds, tau_frames, o.horizon_frames, frames - validation_start,
+                    1e3 * rms, bounded ? "bounded" : "unbounded");
+      say(line);
+      if (bounded && std::isfinite(rms) && rms < chosen.validation_rms_m)
+        chosen = {tau_frames * frame_period_s, rms};
+    }
+    return chosen;
+  };
   const int window = result.candidates[best].window_frames;
   System& sys = best_sys;
   fitter.accumulate(window, validation_start - window, frames, &sys);
@@ -963,8 +999,10 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
   Eigen::VectorXd theta, first_theta;
   bool final_bounded = false;
   int accepted = best;
+  Activation activation, first_activation;
   for (int index : order) {
     const SensorMuscleCandidate& c = result.candidates[index];
+    const Activation a = chooseActivation(index);
     Eigen::VectorXd t;
     if (!fitter.solve(sys, c.ridge, &t)) continue;
     if (c.rollout_rounds > 0) {
@@ -974,11 +1012,14 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
                      [&](int, const Eigen::VectorXd& r, const Fitter::RolloutCount&) { t = r; }))
         continue;
     }
-    if (first_theta.size() == 0) first_theta = t;
+    if (first_theta.size() == 0) {
+      first_theta = t;
+      first_activation = a;
+    }
     double rms = 0.0;
     bool bounded = false;
     try {
-      const Model model = fitter.build(t, o.gain_margin, frames);
+      const Model model = fitter.build(t, o.gain_margin, frames, a.time_s);
       judge(model, &rms, nullptr, &bounded);
       bounded = bounded && fitter.boundedFromEverywhere(model, kFinalRolloutStarts,
                                                         10 * (frames - validation_start + 2));
@@ -986,6 +1027,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
     }
     if (bounded) {
       theta = t;
+      activation = a;
       accepted = index;
       final_bounded = true;
       break;
@@ -995,20 +1037,24 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
         "start or from one of 8 frames over the data) leaves the data; the next candidate");
   }
   if (first_theta.size() == 0) throw InputError("sensor muscles: the final solve failed");
-  if (!final_bounded) theta = first_theta;
+  if (!final_bounded) {
+    theta = first_theta;
+    activation = first_activation;
+  }
   const SensorMuscleCandidate chosen = result.candidates[accepted];
   result.chosen = accepted;
   result.window_frames = chosen.window_frames;
   result.ridge = chosen.ridge;
-  result.validation_rms_m = chosen.validation_rms_m;
+  result.activation_time_s = activation.time_s;
+  result.validation_rms_m = activation.validation_rms_m;
   result.better_than_passive =
-      final_bounded && chosen.bounded && chosen.validation_rms_m < result.passive_rms_m;
+      final_bounded && chosen.bounded && result.validation_rms_m < result.passive_rms_m;
   result.rows = sys.rows;
   // A row sums window^2 frames' a h^2 (the triangle's weights): per frame, divided by that.
   const double per_frame = 1.0 / (passive.frame_rate_hz * passive.frame_rate_hz *
                                   chosen.window_frames * chosen.window_frames);
   result.residual_rms_m = Fitter::residualRms(sys, theta) * per_frame;
-  result.model = fitter.build(theta, o.gain_margin, frames);
+  result.model = fitter.build(theta, o.gain_margin, frames, activation.time_s);
   return result;
 }
 

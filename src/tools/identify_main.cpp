@@ -245,10 +245,11 @@ int run(int argc, char** argv) {
     const mme::SensorMuscleResult sm = mme::addSensorMuscles(r.model, trajectory, sensor_options);
     char line[300];
     std::snprintf(line, sizeof(line),
-                  "sensor muscles: %d sensors, %d muscles, ridge %.0e, %d rollout round(s); %d "
-                  "frames ahead on the last frames %.3g m (passive %.3g m, constant velocity %.3g m)%s",
+                  "sensor muscles: %d sensors, %d muscles, ridge %.0e, %d rollout round(s), "
+                  "activation time constant %.3g s; %d frames ahead on the last frames %.3g m "
+                  "(passive %.3g m, constant velocity %.3g m)%s",
                   sm.sensors, sm.muscles, sm.ridge, sm.candidates[sm.chosen].rollout_rounds,
-                  sensor_options.horizon_frames,
+                  sm.activation_time_s, sensor_options.horizon_frames,
                   sm.validation_rms_m,
                   sm.passive_rms_m, sm.constant_velocity_rms_m,
                   sm.better_than_passive ? "" : ": not better than the passive model, which is kept");

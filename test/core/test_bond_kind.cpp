@@ -41,7 +41,7 @@ TEST(BondKind, FactsOfEachKind) {
   EXPECT_EQ(bondKindInfo(BondKind::kMuscle).arity, 2);
   EXPECT_EQ(bondKindInfo(BondKind::kMuscle).params,
             (std::vector<mme::ParamId>{mme::kStiffness, mme::kRestLength, mme::kDamping,
-                                       mme::kGain}));
+                                       mme::kGain, mme::kActivationTime}));
   EXPECT_TRUE(bondKindInfo(BondKind::kMuscle).network);
   EXPECT_TRUE(bondKindInfo(BondKind::kMuscle).has_elongation);
   EXPECT_FALSE(bondKindInfo(BondKind::kMuscle).interactions);

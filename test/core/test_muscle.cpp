@@ -197,4 +197,96 @@ TEST(Muscle, AnOccludedInputDropsTheMusclesTerms) {
   EXPECT_EQ(dropped, 9u);
 }
 
+/// handModel with an activation time constant on its muscle.
+Model handModelWithActivationTime(double gain, double activation_time_s) {
+  Model m = handModel(gain);
+  m.bond_types[m.bondTypeIndex("m")].param(mme::kActivationTime) = mme::test::valueParam(activation_time_s);
+  return m;
+}
+
+TEST(MuscleActivation, AStateActivationDrivesTheForceAndRelaxesToTheExcitation) {
+  const double tau_s = 0.05, dt_s = 0.004;
+  const Model m = handModelWithActivationTime(3.0, tau_s);
+  mme::Simulator sim(m);
+  ASSERT_TRUE(sim.hasActivationState());
+  const double excitation = 3.0 * std::tanh(0.3);  // ForceMatchesAHandComputation's
+  mme::State s = sim.initialState();
+  ASSERT_TRUE(s.activation_n.empty());
+  std::vector<Vector3d> at_rest, pushed;
+  sim.computeForces(s, &at_rest);  // no activation in the state: the excitation
+  s.activation_n = {excitation + 2.0};
+  sim.computeForces(s, &pushed);
+  EXPECT_NEAR(pushed[1].y() - at_rest[1].y(), 2.0, 1e-12);  // the state's activation pulls
+  EXPECT_NEAR(pushed[2].y() - at_rest[2].y(), -2.0, 1e-12);
+  // One substep: the activation moves toward the excitation taken at the substep's start.
+  sim.step(&s, dt_s);
+  ASSERT_EQ(s.activation_n.size(), 1u);
+  EXPECT_NEAR(s.activation_n[0], excitation + 2.0 * std::exp(-dt_s / tau_s), 1e-12);
+  // Without a time constant the same state's activation is ignored.
+  mme::Simulator instant(handModel(3.0));
+  EXPECT_FALSE(instant.hasActivationState());
+  std::vector<Vector3d> ignored;
+  instant.computeForces(s, &ignored);
+  mme::State fresh = s;
+  fresh.activation_n.clear();
+  std::vector<Vector3d> plain;
+  instant.computeForces(fresh, &plain);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(ignored[i], plain[i]) << i;
+}
+
+TEST(MuscleActivation, AStateWithoutActivationsStartsAtRestAndLagsAfter) {
+  // From a state without activations the muscle starts at its excitation: the first substep
+  // is the instantaneous model's to the bit; later the activation lags the excitation.
+  const Model lagging = handModelWithActivationTime(3.0, 0.2);
+  mme::Simulator sim(lagging), instant(handModel(3.0));
+  mme::State a = sim.initialState(), b = instant.initialState();
+  sim.step(&a, 0.01);
+  instant.step(&b, 0.01);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(a.x_m[i], b.x_m[i]) << i;
+  for (int k = 0; k < 50; ++k) {
+    sim.step(&a, 0.01);
+    instant.step(&b, 0.01);
+  }
+  EXPECT_GT((a.x_m[2] - b.x_m[2]).norm(), 1e-4);
+  // A long time constant makes the activation a near constant: it stays near its start.
+  EXPECT_LT(std::fabs(a.activation_n[0] - 3.0 * std::tanh(0.3)), 0.5 * 3.0);
+}
+
+TEST(MuscleActivation, ActivationsEstimatedFromAnObservedAccelerationReproduceIt) {
+  const Model m = handModelWithActivationTime(3.0, 0.05);
+  mme::Simulator sim(m);
+  mme::State truth = sim.initialState();
+  const double excitation = 3.0 * std::tanh(0.3);
+  truth.activation_n = {excitation - 1.25};
+  std::vector<Vector3d> f;
+  sim.computeForces(truth, &f);
+  std::vector<Vector3d> acceleration(3);
+  for (int i = 0; i < 3; ++i) acceleration[i] = f[i] / m.particles[i].mass_kg;
+  mme::State start = sim.initialState();
+  EXPECT_EQ(sim.estimateActivations(&start, acceleration, {1, 1, 1}), 1);
+  ASSERT_EQ(start.activation_n.size(), 1u);
+  EXPECT_NEAR(start.activation_n[0], excitation - 1.25, 1e-9);
+  // Seen at one end only, the activation is still known.
+  mme::State one_end = sim.initialState();
+  sim.estimateActivations(&one_end, acceleration, {1, 0, 1});
+  EXPECT_NEAR(one_end.activation_n[0], excitation - 1.25, 1e-9);
+  // Neither end seen: nothing to go by, the excitation.
+  mme::State unseen = sim.initialState();
+  sim.estimateActivations(&unseen, acceleration, {1, 0, 0});
+  EXPECT_NEAR(unseen.activation_n[0], excitation, 1e-12);
+  // A model without activation dynamics has nothing to estimate.
+  mme::Simulator instant(handModel(3.0));
+  mme::State s = instant.initialState();
+  s.activation_n = {1.0};
+  EXPECT_EQ(instant.estimateActivations(&s, acceleration, {1, 1, 1}), 0);
+  EXPECT_TRUE(s.activation_n.empty());
+  EXPECT_THROW(sim.estimateActivations(&s, acceleration, {1, 1}), std::invalid_argument);
+}
+
+TEST(MuscleActivation, ANegativeTimeConstantIsRefused) {
+  const std::string reason = mme::validateModel(handModelWithActivationTime(3.0, -0.1));
+  EXPECT_NE(reason.find("activation_time_constant must be >= 0"), std::string::npos) << reason;
+  EXPECT_EQ(mme::validateModel(handModelWithActivationTime(3.0, 0.0)), "");
+}
+
 }  // namespace

@@ -9,6 +9,7 @@
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/identification/muscle_placement.h"
 #include "motion_model_estimation/identification/prediction_error.h"
 #include "test_helpers.h"
 
@@ -225,6 +226,37 @@ TEST(PredictionError, ARolloutThatBlowsUpIsCaughtAndBadInputIsRefused) {
   EXPECT_THROW(mme::evaluatePredictions(truth, data, {0}), mme::InputError);
   mme::Trajectory two = mme::sliceFrames(data, 0, 2);
   EXPECT_THROW(mme::evaluatePredictions(truth, two, {1}), mme::InputError);
+}
+
+/// muscleObject's body pushed down on particle 3 by a muscle to a fixed point far below whose
+/// activation is constant (gain x tanh(bias)); `activation_time_s` on the push.
+mme::Model pushedObject(double bias, double activation_time_s) {
+  mme::Model m = mme::removeMuscles(mme::test::muscleObject());
+  const int below = mme::test::addParticle(&m, Eigen::Vector3d(0.05, 0.1, -30.0), 1.0, true);
+  const int push = mme::test::addMuscleType(&m, "push", 0.0, 29.75, 0.0, 400.0, 0, 0, {bias});
+  if (activation_time_s > 0.0)
+    m.bond_types[push].param(mme::kActivationTime) = mme::test::valueParam(activation_time_s);
+  mme::test::addMuscle(&m, push, 3, below, {});
+  return m;
+}
+
+// A muscle with activation dynamics starts where the data put it: pushed by 2 N the model does
+// not know of, a model whose push muscle is silent but has a time constant reads the push from
+// each start's last three frames and carries it on; the same model without one cannot.
+TEST(PredictionError, AStartsActivationsComeFromTheDatasLastFrames) {
+  const mme::Model truth = pushedObject(0.005, 0.0);  // 400 tanh(0.005) = 2.0 N
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 120, 100.0);
+  const mme::PredictionReport with = mme::evaluatePredictions(pushedObject(0.0, 10.0), data, {10});
+  const mme::PredictionReport without = mme::evaluatePredictions(pushedObject(0.0, 0.0), data, {10});
+  const double rms_with = predictionRms(with, 10, Predictor::kModel);
+  const double rms_without = predictionRms(without, 10, Predictor::kModel);
+  std::printf("an unknown 2 N push, 10 frames ahead: silent muscle %.3g m, with an activation state "
+              "%.3g m, constant acceleration %.3g m\n", rms_without, rms_with,
+              predictionRms(with, 10, Predictor::kConstantAcceleration));
+  EXPECT_GT(rms_without, 1e-3);
+  EXPECT_LT(rms_with, 0.02 * rms_without);
+  EXPECT_LT(rms_with, 0.1 * predictionRms(with, 10, Predictor::kConstantAcceleration));
+  EXPECT_TRUE(with.rollout_bounded);
 }
 
 }  // namespace

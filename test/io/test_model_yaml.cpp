@@ -603,6 +603,27 @@ TEST(ModelYaml, MuscleLoadsItsNetworkAndInputs) {
   EXPECT_EQ(names, (std::vector<std::string>{"m/stiffness", "m/gain", "m/w1_0_0", "m/w2_0"}));
 }
 
+TEST(ModelYaml, MuscleActivationTimeConstantLoadsRoundTripsAndIsChecked) {
+  const Model m = loadModelString(muscleEdited(12, "    damping: 0.5\n    activation_time_constant: 0.05"),
+                                  "tau.yaml");
+  EXPECT_EQ(m.bond_types[m.bondTypeIndex("m")].value(kActivationTime), 0.05);
+  const std::string text = modelToYaml(m);
+  EXPECT_NE(text.find("activation_time_constant"), std::string::npos);
+  expectSameModel(m, loadModelString(text, "back.yaml"));
+  // Without the key the muscle has none (and the file does not mention it).
+  const Model plain = loadModelString(muscleEdited(99, ""), "muscle.yaml");
+  EXPECT_FALSE(plain.bond_types[plain.bondTypeIndex("m")].param(kActivationTime).present);
+  EXPECT_EQ(modelToYaml(loadModelString(muscleEdited(99, ""), "m.yaml")).find("activation_time"),
+            std::string::npos);
+  try {
+    loadModelString(muscleEdited(12, "    damping: 0.5\n    activation_time_constant: -0.1"), "neg.yaml");
+    ADD_FAILURE() << "a negative time constant was accepted";
+  } catch (const mme::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("activation_time_constant must be >= 0"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(ModelYaml, MuscleRoundTripIsExact) {
   const Model m = loadModelString(muscleEdited(99, ""), "muscle.yaml");
   const std::string text = modelToYaml(m);
@@ -631,7 +652,7 @@ TEST(ModelYamlErrors, BadMuscleDefinitions) {
               "duplicate bond name 'ab' (first at line 21)");
   expectError(muscleEdited(17, "    w1_1_0: 2"), 17, "w1_1_0",
               "unknown key for a muscle in bond type 'm' (allowed: name, kind, stiffness, "
-              "rest_length, damping, gain, inputs, hidden, and the network's "
+              "rest_length, damping, gain, activation_time_constant, inputs, hidden, and the network's "
               "w1_<0..0>_<0..3>, b1_<0..0>, w2_<0..0>, b2 (inputs 2, hidden 1))");
   expectError(muscleEdited(15, "    hidden: 40"), 15, "hidden", "must be in [0, 32]");
   // A muscle reading no bond (a constant activation gain tanh(b2)) needs no inputs key.

@@ -28,6 +28,9 @@ enum ParamId : int {
   kGain,              ///< muscle output gain [N]: activation = gain * tanh(network output)
   kFriction,          ///< floor: viscous friction along the floor while in contact [N s/m]
   kHeight,            ///< floor: height of the floor plane z = height [m] (world z up)
+  /// muscle: activation dynamics' time constant [s]; 0 or absent: the activation is the
+  /// network's output at once (muscle.h)
+  kActivationTime,
   kParamCount
 };
 

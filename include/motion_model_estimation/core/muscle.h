@@ -7,7 +7,10 @@
 // z_{n+i} = (v_b - v_a) . u_i [m/s], in the order the bond lists its inputs.
 //   hidden H > 0:  h_j = tanh(b1_j + sum_i w1_j_i z_i),  y = b2 + sum_j w2_j h_j
 //   hidden H = 0:  y = b2 + sum_i w2_i z_i                (no hidden layer: linear in z)
-//   activation a = gain * tanh(y)   [N], added to the tension (a > 0 pulls the ends together)
+//   excitation u = gain * tanh(y)   [N]
+//   activation a = u, added to the tension (a > 0 pulls the ends together); with the type's
+//   activation_time_constant tau > 0, a is a state instead: da/dt = (u - a) / tau (Simulator,
+//   State::activation_n; README "Muscles")
 // Parameters in storage order: w1 (row-major, H x 2n), b1 (H), w2 (H, or 2n when H = 0), b2.
 #pragma once
 
@@ -27,8 +30,9 @@ int muscleNetworkIndex(int inputs, int hidden, const std::string& key);
 /// The layout's names for error messages, e.g. "w1_<0..2>_<0..3>, b1_<0..2>, w2_<0..2>, b2".
 std::string muscleNetworkLayout(int inputs, int hidden);
 
-/// a = gain * tanh(y) [N] for network parameters `network` (muscleNetworkSize of them) and
-/// inputs z (2 * inputs values: elongations [m], then elongation speeds [m/s]).
+/// The excitation gain * tanh(y) [N] (a muscle's activation when it has no activation time
+/// constant) for network parameters `network` (muscleNetworkSize of them) and inputs z
+/// (2 * inputs values: elongations [m], then elongation speeds [m/s]).
 double muscleActivation(const double* network, int inputs, int hidden, double gain_n,
                         const double* z);
 

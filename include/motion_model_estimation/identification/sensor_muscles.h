@@ -49,6 +49,16 @@
 // divided by it, so tanh stays within 0.4 % of linear where the data went (and bounds the
 // activation beyond).
 //
+// Activation dynamics (`activation_times_frames`): a posture-driven muscle cannot tell a drive
+// that changes in time (an arm moved by excitations), which the constant-acceleration guess
+// simply carries on. So the chosen candidate's validation fit is judged again with each
+// candidate activation time constant on every muscle: a start's activations then come from the
+// data's last frames (evaluatePredictions, Simulator::estimateActivations) and fade to the
+// network's excitation. The bounded one with the lowest validation error is kept when it beats
+// the fit without (arm26: 0.76 -> 0.28 mm 10 frames ahead held out, below the constant-
+// acceleration guess's 0.50; on noisy walks none is kept: a start's acceleration is the markers'
+// noise over h^2), and the final refit is built with it (a fallback candidate gets its own).
+//
 // Rollout equations (Data as Demonstrator, Venkatraman, Hebert and Bagnell 2015): the one-step
 // fit learns where the data go from where the data are, but a prediction 10 frames ahead runs
 // from where its own errors took it, and with noisy markers the one-step equations are biased
@@ -106,6 +116,9 @@ struct SensorMuscleOptions {
   /// controller: with negative ones the closed loop leaves the data within the 10x rollout).
   bool nonnegative_own_spring = true;
   double gain_margin = 10.0;         ///< gain = margin x the largest linear activation [1]
+  /// Candidate activation time constants [frames] (see above; 0 or none: the activation is the
+  /// excitation at once), each tried on the chosen candidate's validation fit.
+  std::vector<double> activation_times_frames = {3.0, 10.0, 30.0, 100.0};
   /// Rounds of rollout equations (Data as Demonstrator, see above; 0: none). Measured on
   /// bench_paper fig5's split: motion_capture_walk 13.34 -> 12.62 mm 10 frames ahead held out,
   /// subject01 34.24 -> 29.02, Sample01 28.68 -> 27.72, Sample26 and arm26 unchanged (no round
@@ -140,7 +153,8 @@ struct SensorMuscleResult {
   int chosen = -1;            ///< the chosen candidate
   int window_frames = 1;      ///< its window
   double ridge = 0.0;         ///< its relative ridge
-  double validation_rms_m = 0.0;         ///< its validation RMS horizon ahead
+  double activation_time_s = 0.0;        ///< its muscles' activation time constant (0: none)
+  double validation_rms_m = 0.0;         ///< its validation RMS horizon ahead (with it)
   double passive_rms_m = 0.0;            ///< the passive model on the same validation frames
   double constant_velocity_rms_m = 0.0;  ///< the constant-velocity guess there
   /// The chosen fit predicted the validation frames better than the passive model, its rollout
