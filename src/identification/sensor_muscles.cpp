@@ -6,6 +6,7 @@
 #include <deque>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <set>
 #include <string>
 #include <utility>
@@ -781,7 +782,46 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   Model anchored = passive;
   Trajectory anchored_data = data;
   const std::vector<char> anchor = addAnchors(&anchored, &anchored_data, o.anchor_distance_extents);
-  return fitSensorMuscles(anchored, anchored_data, anchor, o);
+  if (!o.anchors_by_validation) {
+    SensorMuscleResult with = fitSensorMuscles(anchored, anchored_data, anchor, o);
+    with.anchors = true;
+    return with;
+  }
+  // Both layouts, judged on the same validation frames: the anchors' extra unknowns fit noise
+  // on a small body whose controller lives between its particles, and push along the world
+  // where a walk's accelerations live. A layout too large to fit (kMaxUnknowns) or without a
+  // usable fit leaves the other.
+  const auto say = [&](const std::string& line) {
+    if (o.progress) o.progress(line);
+  };
+  std::optional<SensorMuscleResult> with, without;
+  try {
+    say("sensor muscles: with anchors");
+    with = fitSensorMuscles(anchored, anchored_data, anchor, o);
+    with->anchors = true;
+  } catch (const InputError& e) {
+    say(std::string("sensor muscles: with anchors: ") + e.what());
+  }
+  say("sensor muscles: without anchors");
+  try {
+    without = fitSensorMuscles(passive, data, std::vector<char>(n, 0), o);
+  } catch (const InputError& e) {
+    if (!with) throw;
+    say(std::string("sensor muscles: without anchors: ") + e.what());
+  }
+  if (!with) return *without;
+  if (!without) return *with;
+  const bool plain_better =
+      (without->better_than_passive && !with->better_than_passive) ||
+      (without->better_than_passive == with->better_than_passive &&
+       without->validation_rms_m < with->validation_rms_m);
+  char line[200];
+  std::snprintf(line, sizeof(line), "sensor muscles: %s anchors (validation %.2f mm, %s %.2f mm)",
+                plain_better ? "without" : "with", 1e3 * (plain_better ? without : with)->validation_rms_m,
+                plain_better ? "with them" : "without them",
+                1e3 * (plain_better ? with : without)->validation_rms_m);
+  say(line);
+  return plain_better ? *without : *with;
 }
 
 namespace {

@@ -30,7 +30,7 @@ const char* kUsage =
     "                [--refine-period G] [--select-structure]\n"
     "                [--add-muscles INPUTS] [--muscle-hidden H]\n"
     "                [--sensor-muscles SENSORS] [--muscle-neighbours K] [--rollout-rounds R]\n"
-    "                [--muscle-anchors 0|1]\n";
+    "                [--muscle-anchors auto|0|1]\n";
 
 std::string formatMetres(double m) {
   char text[32];
@@ -174,7 +174,13 @@ int run(int argc, char** argv) {
         args.getInt("muscle-neighbours", sensor_options.neighbours, 0, 64));
     sensor_options.rollout_rounds = static_cast<int>(
         args.getInt("rollout-rounds", sensor_options.rollout_rounds, 0, 20));
-    sensor_options.anchors = args.getInt("muscle-anchors", sensor_options.anchors ? 1 : 0, 0, 1) == 1;
+    // auto (the default): both layouts fitted, the one predicting the validation frames better
+    // kept; 1: with anchors; 0: without.
+    const std::string anchors = args.get("muscle-anchors", "auto");
+    if (anchors != "auto" && anchors != "0" && anchors != "1")
+      throw mme::InputError("--muscle-anchors must be auto, 0 or 1, got '" + anchors + "'");
+    sensor_options.anchors = anchors != "0";
+    sensor_options.anchors_by_validation = anchors == "auto";
     sensor_options.progress = [&](const std::string& line) {
       if (!quiet) std::printf("identify: %s\n", line.c_str());
       std::fflush(stdout);
@@ -246,10 +252,10 @@ int run(int argc, char** argv) {
     char line[300];
     std::snprintf(line, sizeof(line),
                   "sensor muscles: %d sensors, %d muscles, ridge %.0e, %d rollout round(s), "
-                  "activation time constant %.3g s; %d frames ahead on the last frames %.3g m "
-                  "(passive %.3g m, constant velocity %.3g m)%s",
+                  "activation time constant %.3g s, %s anchors; %d frames ahead on the last frames "
+                  "%.3g m (passive %.3g m, constant velocity %.3g m)%s",
                   sm.sensors, sm.muscles, sm.ridge, sm.candidates[sm.chosen].rollout_rounds,
-                  sm.activation_time_s, sensor_options.horizon_frames,
+                  sm.activation_time_s, sm.anchors ? "with" : "without", sensor_options.horizon_frames,
                   sm.validation_rms_m,
                   sm.passive_rms_m, sm.constant_velocity_rms_m,
                   sm.better_than_passive ? "" : ": not better than the passive model, which is kept");

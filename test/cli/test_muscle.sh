@@ -87,13 +87,14 @@ done
 # Sensor muscles (--sensor-muscles): on the passive fit, muscles reading the pairs whose distance
 # varies most, fitted by least squares; the ridge is chosen on the last 20 % of the frames and the
 # muscles are written only when they predict those better than the passive model (here they do:
-# the muscle's motion is not passive). With the anchors (the default) each of the 3 free particles
-# also has a muscle to each of three fixed anchor particles far along x, y and z: 6 + 9 muscles.
+# the muscle's motion is not passive). With the anchors (--muscle-anchors 1) each of the 3 free
+# particles also has a muscle to each of three fixed anchor particles far along x, y and z:
+# 6 + 9 muscles.
 # The export simulates, and evaluate judges it on the data, which have no anchor markers (fixed
 # particles need none). (Out-of-range options: above.)
 "$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/sensor.yaml" \
-  --cost short_term --sensor-muscles 6 --muscle-neighbours 3 >"$tmp/sensor.log" 2>"$tmp/sensor.err"
-grep -q "^identify: sensor muscles: 6 sensors, 15 muscles, ridge .*; 10 frames ahead on the last frames" "$tmp/sensor.log" ||
+  --cost short_term --sensor-muscles 6 --muscle-neighbours 3 --muscle-anchors 1 >"$tmp/sensor.log" 2>"$tmp/sensor.err"
+grep -q "^identify: sensor muscles: 6 sensors, 15 muscles, ridge .*, with anchors; 10 frames ahead on the last frames" "$tmp/sensor.log" ||
   { echo "no sensor-muscle report:"; grep sensor "$tmp/sensor.log"; exit 1; }
 awk '/^identify: sensor muscles: 6 sensors, 15 muscles, ridge/ {
   for (i = 1; i <= NF; ++i) { if ($i == "frames" && $(i+1) ~ /^[0-9]/) m = $(i+1); if ($i == "(passive") p = $(i+1) }
@@ -111,5 +112,23 @@ grep -q "constant_velocity" "$tmp/sensor_eval.log" || { echo "evaluate:"; cat "$
 grep -q "^identify: sensor muscles: 6 sensors, 6 muscles, ridge" "$tmp/sensor0.log" ||
   { echo "--muscle-anchors 0:"; grep sensor "$tmp/sensor0.log"; exit 1; }
 ! grep -q "name: anchor_" "$tmp/sensor0.yaml"
+# The default (auto): both layouts fitted, the one predicting the last 20 % better kept; the
+# report names it and the file has the anchors exactly when it says so.
+"$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/sensor_auto.yaml" \
+  --cost short_term --sensor-muscles 6 --muscle-neighbours 3 >"$tmp/sensor_auto.log" 2>&1
+grep -q "^identify: sensor muscles: \(with\|without\) anchors (validation .* mm, \(with\|without\) them .* mm)" \
+  "$tmp/sensor_auto.log" || { echo "no anchor choice:"; grep sensor "$tmp/sensor_auto.log"; exit 1; }
+anchors=$(grep -c "name: anchor_[xyz]" "$tmp/sensor_auto.yaml" || true)
+# The same model file but for the identification's wall time.
+same_model() {
+  local d
+  d=$(diff <(grep -v "wall_time_s:" "$tmp/sensor_auto.yaml") <(grep -v "wall_time_s:" "$1") || true)
+  [ -z "$d" ] || { echo "$d" | head; return 1; }
+}
+if grep -q "^identify: sensor muscles: 6 sensors, .*, with anchors;" "$tmp/sensor_auto.log"; then
+  [ "$anchors" -eq 3 ]; same_model "$tmp/sensor.yaml" || { echo "auto with anchors differs from --muscle-anchors 1"; exit 1; }
+else
+  [ "$anchors" -eq 0 ]; same_model "$tmp/sensor0.yaml" || { echo "auto without anchors differs from --muscle-anchors 0"; exit 1; }
+fi
 
 echo "muscle: README example simulated, identified, exported and reloaded; bad definitions refused; muscles placed on a passive fit lower its cost; sensor muscles predict its held-out frames better"
