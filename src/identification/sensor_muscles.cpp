@@ -1089,6 +1089,16 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
   result.validation_rms_m = activation.validation_rms_m;
   result.better_than_passive =
       final_bounded && chosen.bounded && result.validation_rms_m < result.passive_rms_m;
+  char why[240] = "";
+  if (!chosen.bounded)
+    std::snprintf(why, sizeof(why), "no candidate's 10x validation rollout stayed bounded");
+  else if (!final_bounded)
+    std::snprintf(why, sizeof(why), "every refit on all frames tried (%zu) left the data over its "
+                  "10x rollouts", order.size());
+  else if (!(result.validation_rms_m < result.passive_rms_m))
+    std::snprintf(why, sizeof(why), "its validation error %.3g m is not below the passive model's "
+                  "%.3g m", result.validation_rms_m, result.passive_rms_m);
+  result.not_kept_because = why;
   result.rows = sys.rows;
   // A row sums window^2 frames' a h^2 (the triangle's weights): per frame, divided by that.
   const double per_frame = 1.0 / (passive.frame_rate_hz * passive.frame_rate_hz *

@@ -261,9 +261,8 @@ int run(int argc, char** argv) {
                   sm.better_than_passive ? "" : ": not better than the passive model, which is kept");
     std::printf("identify: %s\n", line);
     if (!sm.better_than_passive)
-      std::fprintf(stderr, "identify: warning: the sensor muscles did not predict the held-out "
-                   "frames better than the passive model (or their rollout was unbounded): the "
-                   "passive model is written\n");
+      std::fprintf(stderr, "identify: warning: the sensor muscles are not kept (%s): the passive "
+                   "model is written\n", sm.not_kept_because.c_str());
     else
       out_model = sm.model;
     notes.push_back(line);

@@ -81,6 +81,7 @@ TEST(SensorMuscles, LearnTheControllerThePassiveModelLacks) {
   EXPECT_GT(r.muscles, 4);
   EXPECT_EQ(r.unknowns, static_cast<size_t>(r.muscles * (2 * 6 + 3)));
   EXPECT_TRUE(r.better_than_passive);
+  EXPECT_EQ(r.not_kept_because, "");
   const mme::SensorMuscleOptions o = smallOptions();
   // The one-step candidates, then the rounds from one or two of them.
   const size_t plain = o.windows_frames.size() * o.ridges.size();
@@ -128,6 +129,10 @@ TEST(SensorMuscles, StaySilentWhereNoControllerActed) {
   const mme::SensorMuscleResult r =
       mme::addSensorMuscles(passive, mme::sliceFrames(data, 0, kFitted), smallOptions());
   EXPECT_LT(r.residual_rms_m, 1e-9);
+  // Nothing to gain: not kept, and the reason says so.
+  EXPECT_FALSE(r.better_than_passive);
+  EXPECT_NE(r.not_kept_because.find("is not below the passive model's"), std::string::npos)
+      << r.not_kept_because;
   EXPECT_LT(heldOutRms(r.model, data), 1e-6);
   EXPECT_LT(heldOutRms(passive, data), 1e-9);
 }

@@ -171,6 +171,8 @@ struct SensorMuscleResult {
   /// start and from 8 frames spread over the data (a refit that does not is replaced by the next
   /// candidate, up to 4 tried); when false, keep the passive model.
   bool better_than_passive = false;
+  /// Why better_than_passive is false, in words (empty when it is true).
+  std::string not_kept_because;
   /// The final fit's residual per frame, a h^2 [m] (a window's row divided by window^2).
   double residual_rms_m = 0.0;
 };
