@@ -764,6 +764,10 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
     throw InputError("sensor muscles: the rollout correction time must be a finite number >= 0 frames");
   if (!(o.anchor_distance_extents >= 1.0) || !std::isfinite(o.anchor_distance_extents))
     throw InputError("sensor muscles: the anchors' distance must be a finite number >= 1 extent");
+  for (double tau_frames : o.activation_times_frames)
+    if (!(tau_frames >= 0.0) || !std::isfinite(tau_frames))
+      throw InputError("sensor muscles: the activation time constants must be finite numbers >= 0 "
+                       "frames, got " + std::to_string(tau_frames));
   if (!(o.min_seen_share >= 0.0 && o.min_seen_share <= 1.0))
     throw InputError("sensor muscles: min_seen_share must be in [0, 1]");
   if (!(passive.frame_rate_hz > 0.0)) throw InputError("sensor muscles: the model has no frame rate");

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -475,6 +476,12 @@ TEST(SensorMuscles, BadInputGetsClearErrors) {
   o = smallOptions();
   o.rollout_correction_frames = std::nan("");
   EXPECT_NE(message(passive, data, o).find("rollout correction"), std::string::npos);
+  for (double bad : {-1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    o = smallOptions();
+    o.activation_times_frames = {10.0, bad};
+    EXPECT_NE(message(passive, data, o).find("activation time constants must be finite numbers >= 0"),
+              std::string::npos) << bad;
+  }
   EXPECT_NE(message(passive, mme::sliceFrames(data, 0, 12), smallOptions()).find("too few"),
             std::string::npos);
   Model unvalued = passive;
