@@ -400,17 +400,19 @@ void Simulator::step(State* s, double dt_s) {
   if (s->x_m.size() != n || s->v_mps.size() != n)
     throw std::invalid_argument("Simulator: state size differs from the particle count");
   const size_t muscles = impl_->engine.numMuscles();
-  if (impl_->activation_state && s->activation_n.size() != muscles) {
-    // A state without activations starts with every muscle at rest: at its excitation.
-    s->activation_n.clear();
-    impl_->forces(*s);
-    s->activation_n = impl_->excitation;
-  }
+  // A state without activations (or another model's) has every muscle at rest, at its
+  // excitation: forces() uses the excitation for it.
+  const bool at_rest = impl_->activation_state && s->activation_n.size() != muscles;
   impl_->forces(*s);
   double* x = flat(s->x_m);
   impl_->engine.integrate(dt_s, impl_->f.data(), x, flat(s->v_mps));
   impl_->engine.clamp(impl_->laws, x);
   if (!impl_->activation_state) return;
+  // At rest a = u, and the update below leaves it there.
+  if (at_rest) {
+    s->activation_n = impl_->excitation;
+    return;
+  }
   // Activation dynamics, exact for the excitation held over the substep:
   // a <- u + (a - u) exp(-dt / tau); a muscle without a time constant follows u at once.
   const std::vector<detail::MuscleBond>& bonds = impl_->engine.muscles();

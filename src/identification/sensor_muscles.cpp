@@ -1046,7 +1046,6 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
   Activation activation, first_activation;
   for (int index : order) {
     const SensorMuscleCandidate& c = result.candidates[index];
-    const Activation a = chooseActivation(index);
     Eigen::VectorXd t;
     if (!fitter.solve(sys, c.ridge, &t)) continue;
     if (c.rollout_rounds > 0) {
@@ -1056,6 +1055,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
                      [&](int, const Eigen::VectorXd& r, const Fitter::RolloutCount&) { t = r; }))
         continue;
     }
+    const Activation a = chooseActivation(index);
     if (first_theta.size() == 0) {
       first_theta = t;
       first_activation = a;

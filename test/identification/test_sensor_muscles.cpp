@@ -29,15 +29,17 @@ using mme::Model;
 
 constexpr int kFrames = 300, kFitted = 240, kHorizon = 10;
 
-/// The model's error kHorizon frames ahead on the frames after kFitted (the data remapped to
-/// the model's particles: the sensor muscles' anchors are fixed particles without markers).
-double heldOutRms(const Model& model, const mme::Trajectory& data, bool* bounded = nullptr) {
+/// A predictor's error kHorizon frames ahead on the frames from `first_start` (kFitted by
+/// default), the data remapped to the model's particles (the sensor muscles' anchors are fixed
+/// particles without markers).
+double heldOutRms(const Model& model, const mme::Trajectory& data, bool* bounded = nullptr,
+                  int first_start = kFitted, mme::Predictor predictor = mme::Predictor::kModel) {
   std::vector<std::string> names;
   for (const mme::Particle& p : model.particles) names.push_back(p.name);
-  const mme::PredictionReport report =
-      mme::evaluatePredictions(model, mme::remapMarkers(data, names, nullptr), {kHorizon}, 10.0, kFitted);
+  const mme::PredictionReport report = mme::evaluatePredictions(
+      model, mme::remapMarkers(data, names, nullptr), {kHorizon}, 10.0, first_start);
   if (bounded) *bounded = report.rollout_bounded;
-  return mme::test::predictionRms(report, kHorizon, mme::Predictor::kModel);
+  return mme::test::predictionRms(report, kHorizon, predictor);
 }
 
 /// muscleObject with its controller in the near-linear range: gain 100x, network weights and
@@ -333,12 +335,7 @@ TEST(SensorMuscles, AnActivationStateCarriesTheArmsDriveOnArm26) {
   EXPECT_EQ(muscle_types, r.muscles);
   const Model loaded = mme::loadModelString(mme::modelToYaml(r.model), "arm26.yaml");
   auto held = [&](const Model& model, mme::Predictor predictor, bool* bounded) {
-    std::vector<std::string> names;
-    for (const mme::Particle& p : model.particles) names.push_back(p.name);
-    const mme::PredictionReport report = mme::evaluatePredictions(
-        model, mme::remapMarkers(split.held, names, nullptr), {kHorizon}, 10.0, split.held_start);
-    if (bounded) *bounded = report.rollout_bounded;
-    return mme::test::predictionRms(report, kHorizon, predictor);
+    return heldOutRms(model, split.held, bounded, split.held_start, predictor);
   };
   bool bounded = false;
   const double with_state = held(r.model, mme::Predictor::kModel, &bounded);
