@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #include <Eigen/Dense>
@@ -202,27 +203,42 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
       report.rows.push_back(row);
     }
 
-  // A long rollout from the first start stays near the data.
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
-  // Fixed particles (anchors far away, a floor) stay where they are: the free ones' box.
-  for (int t = judged_from; t < frames; ++t)
-    for (int i = 0; i < n; ++i)
-      if (!model.particles[i].fixed && !obs.isOccluded(t, i)) {
-        lo = lo.cwiseMin(x(t, i));
-        hi = hi.cwiseMax(x(t, i));
-      }
-  const Eigen::Vector3d centre = 0.5 * (lo + hi);
-  const double limit_m = 10.0 * std::max((hi - lo).norm(), 1e-3);
+  // A long rollout from the first start stays near the judged frames.
+  const RolloutBound bound = RolloutBound::of(model, obs, judged_from, frames);
   report.rollout_frames = static_cast<int>(rollout_factor * (frames - judged_from));
   s = first_state;
   report.rollout_bounded = true;
   for (int k = 0; k < report.rollout_frames && report.rollout_bounded; ++k) {
     sim.stepFrame(&s, h);
-    for (int i = 0; i < n; ++i)
-      if (!model.particles[i].fixed && (!s.x_m[i].allFinite() || (s.x_m[i] - centre).norm() > limit_m))
-        report.rollout_bounded = false;
+    report.rollout_bounded = bound.holds(model, s.x_m);
   }
   return report;
+}
+
+RolloutBound RolloutBound::of(const Model& model, const Observations& obs, int first_frame, int end_frame) {
+  const int n = static_cast<int>(model.particles.size());
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (int t = std::max(first_frame, 0); t < std::min(end_frame, obs.frames); ++t)
+    for (int i = 0; i < n; ++i)
+      if (!model.particles[i].fixed && !obs.isOccluded(t, i)) {
+        const Eigen::Map<const Eigen::Vector3d> x(obs.position(t, i));
+        lo = lo.cwiseMin(x);
+        hi = hi.cwiseMax(x);
+      }
+  RolloutBound bound;
+  if (lo.allFinite() && hi.allFinite()) {
+    bound.centre_m = 0.5 * (lo + hi);
+    bound.extent_m = std::max((hi - lo).norm(), 1e-3);
+  }
+  return bound;
+}
+
+bool RolloutBound::holds(const Model& model, const std::vector<Eigen::Vector3d>& x_m) const {
+  const double limit_m = kExtents * extent_m;
+  for (size_t i = 0; i < x_m.size() && i < model.particles.size(); ++i)
+    if (!model.particles[i].fixed && (!x_m[i].allFinite() || (x_m[i] - centre_m).norm() > limit_m))
+      return false;
+  return true;
 }
 
 }  // namespace mme

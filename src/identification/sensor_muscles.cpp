@@ -83,15 +83,7 @@ class Fitter {
       at_[layout.muscles[m].b].push_back({m, -1.0});
     }
     computeScales();
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-    for (int t = 0; t < data.numFrames(); ++t)
-      for (int i = 0; i < n_; ++i)
-        if (!passive.particles[i].fixed && !data.isOccluded(t, i)) {
-          lo = lo.cwiseMin(data.position(t, i));
-          hi = hi.cwiseMax(data.position(t, i));
-        }
-    extent_m_ = lo.allFinite() && hi.allFinite() ? std::max((hi - lo).norm(), 1e-3) : 1e-3;
-    centre_m_ = lo.allFinite() && hi.allFinite() ? Eigen::Vector3d(0.5 * (lo + hi)) : Eigen::Vector3d::Zero();
+    bound_ = RolloutBound::of(passive, obs_, 0, data.numFrames());
   }
 
   int unknowns() const { return m_ * k_; }
@@ -177,7 +169,7 @@ class Fitter {
         bool near = true;
         for (int i = 0; i < n_ && near; ++i)
           near = state.x_m[i].allFinite() &&
-                 (data_.isOccluded(t + k, i) || (state.x_m[i] - data_.position(t + k, i)).norm() <= extent_m_);
+                 (data_.isOccluded(t + k, i) || (state.x_m[i] - data_.position(t + k, i)).norm() <= bound_.extent_m);
         if (!near) {
           ++count.stopped;
           break;
@@ -248,13 +240,11 @@ class Fitter {
   }
 
   /// Whether `model` stays near the data when run open loop `rollout_frames` long from `starts`
-  /// frames spread evenly over the data (startState's states): every free particle within
-  /// 10x the data's extent (free particles' box diagonal) of the box's centre, as
-  /// evaluatePredictions bounds its one rollout. A model's instability can depend on where it
+  /// frames spread evenly over the data (startState's states): within the data's RolloutBound,
+  /// as evaluatePredictions bounds its one rollout. A model's instability can depend on where it
   /// starts; the held-out test starts where the data end.
   bool boundedFromEverywhere(const Model& model, int starts, int rollout_frames) const {
     Simulator sim(model);
-    const double limit_m = 10.0 * extent_m_;
     const int frames = data_.numFrames();
     State state;
     for (int k = 0; k < starts; ++k) {
@@ -263,10 +253,7 @@ class Fitter {
       if (t >= frames || !startState(t, &state, &filled)) continue;
       for (int step = 0; step < rollout_frames; ++step) {
         sim.stepFrame(&state, h_);
-        for (int i = 0; i < n_; ++i)
-          if (!passive_.particles[i].fixed &&
-              (!state.x_m[i].allFinite() || (state.x_m[i] - centre_m_).norm() > limit_m))
-            return false;
+        if (!bound_.holds(passive_, state.x_m)) return false;
       }
     }
     return true;
@@ -603,8 +590,7 @@ class Fitter {
   bool own_spring_nonnegative_;  ///< see solve()
   int n_, s_, m_, k_;
   double h_ = 0.0;
-  double extent_m_ = 0.0;  ///< the free particles' bounding-box diagonal over the data [m]
-  Eigen::Vector3d centre_m_ = Eigen::Vector3d::Zero();  ///< that box's centre [m]
+  RolloutBound bound_;  ///< the free particles' box over the data (its diagonal: the data's extent)
   std::vector<std::vector<int>> partners_;
   bool all_partners_ = false;
   std::vector<std::vector<std::pair<int, double>>> at_;  ///< per particle: (muscle, sign)

@@ -2,7 +2,7 @@
 // model-free guesses do not; each guess is exact on the motion it assumes; occluded targets do
 // not count and a start tolerates short gaps; a model that blows up is caught by the rollout;
 // bad horizons are refused; a marker unseen at a start is placed by its neighbours' rigid motion,
-// from earlier frames only.
+// from earlier frames only; the rollout bound is the free particles' box over the chosen frames.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -226,6 +226,42 @@ TEST(PredictionError, ARolloutThatBlowsUpIsCaughtAndBadInputIsRefused) {
   EXPECT_THROW(mme::evaluatePredictions(truth, data, {0}), mme::InputError);
   mme::Trajectory two = mme::sliceFrames(data, 0, 2);
   EXPECT_THROW(mme::evaluatePredictions(truth, two, {1}), mme::InputError);
+}
+
+// The bound a rollout must stay in: the free particles' box over the chosen frames (a fixed
+// particle far away neither widens it nor leaves it), 10 box diagonals around its centre, and
+// nothing non-finite.
+TEST(PredictionError, TheRolloutBoundIsTheFreeParticlesBoxOverTheChosenFrames) {
+  mme::Model model = freeParticles(2);
+  mme::test::addParticle(&model, Eigen::Vector3d(1e3, 0.0, 0.0), 1.0, true);
+  mme::Trajectory data;
+  data.marker_names = {model.particles[0].name, model.particles[1].name, model.particles[2].name};
+  data.frame_rate_hz = 100.0;
+  data.resize(4);
+  data.occluded.assign(data.occluded.size(), 0);
+  for (int t = 0; t < 4; ++t) {
+    data.position(t, 0) = Eigen::Vector3d(0.0, 0.0, 0.0);
+    data.position(t, 1) = Eigen::Vector3d(0.3, 0.4, 0.0) * (t < 2 ? 1.0 : 2.0);
+    data.position(t, 2) = Eigen::Vector3d(1e3, 0.0, 0.0);
+  }
+  const mme::Observations obs = mme::prepareObservations(model, data);
+  const mme::RolloutBound early = mme::RolloutBound::of(model, obs, 0, 2);
+  EXPECT_NEAR(early.extent_m, 0.5, 1e-12);
+  EXPECT_TRUE(early.centre_m.isApprox(Eigen::Vector3d(0.15, 0.2, 0.0)));
+  EXPECT_NEAR(mme::RolloutBound::of(model, obs, 0, 4).extent_m, 1.0, 1e-12);
+  std::vector<Eigen::Vector3d> x = {early.centre_m + Eigen::Vector3d(4.9, 0.0, 0.0), early.centre_m,
+                                    Eigen::Vector3d(1e3, 0.0, 0.0)};
+  EXPECT_TRUE(early.holds(model, x));
+  x[0].x() += 0.2;  // 5.1 m from the centre: beyond 10 x 0.5 m
+  EXPECT_FALSE(early.holds(model, x));
+  x[0] = early.centre_m;
+  x[1].z() = std::nan("");
+  EXPECT_FALSE(early.holds(model, x));
+  // Nothing seen: a 1 mm box at the origin.
+  data.occluded.assign(data.occluded.size(), 1);
+  const mme::RolloutBound none = mme::RolloutBound::of(model, mme::prepareObservations(model, data), 0, 4);
+  EXPECT_EQ(none.extent_m, 1e-3);
+  EXPECT_TRUE(none.centre_m.isZero());
 }
 
 /// muscleObject's body pushed down on particle 3 by a muscle to a fixed point far below whose

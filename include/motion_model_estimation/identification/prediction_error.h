@@ -38,6 +38,21 @@ struct PredictionReport {
   int rollout_frames = 0;
 };
 
+/// Where a rollout must stay: every free particle finite and within kExtents x the free
+/// particles' bounding-box diagonal (over some frames of the data) of that box's centre. Fixed
+/// particles stay where they are (anchors may lie far away, a floor) and are not judged.
+/// evaluatePredictions bounds its long rollout by it; fits that judge their own rollouts use it
+/// too, so that "left the data" means one thing.
+struct RolloutBound {
+  static constexpr double kExtents = 10.0;
+  Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();  ///< the box's centre [m]
+  double extent_m = 1e-3;  ///< the box's diagonal [m] (at least 1 mm; 1 mm when nothing is seen)
+  /// The box of `model`'s free particles where `obs` sees them in frames [first_frame, end_frame).
+  static RolloutBound of(const Model& model, const Observations& obs, int first_frame, int end_frame);
+  /// Every free particle of `model` at `x_m` finite and within kExtents x extent_m of the centre.
+  bool holds(const Model& model, const std::vector<Eigen::Vector3d>& x_m) const;
+};
+
 /// Where free particle i is at frame t, from the frames up to t only: seen there, its observation;
 /// else the rigid motion (least squares, Kabsch) of its nearest free neighbours (up to 4) from the
 /// latest frame s < t where it was seen to t, applied to x_i(s): the "rigid body fill" of
