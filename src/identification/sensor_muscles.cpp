@@ -743,6 +743,9 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
     throw InputError("sensor muscles: the gain margin must be a finite number >= 1");
   if (o.rollout_rounds < 0 || o.rollout_rounds > 20)
     throw InputError("sensor muscles: rollout rounds must be 0..20, got " + std::to_string(o.rollout_rounds));
+  if (o.rollout_lower_ridges < 0 || o.rollout_lower_ridges > 20)
+    throw InputError("sensor muscles: rollout_lower_ridges must be 0..20, got " +
+                     std::to_string(o.rollout_lower_ridges));
   if (o.rollout_stride_frames < 1)
     throw InputError("sensor muscles: the rollout stride must be >= 1 frame, got " +
                      std::to_string(o.rollout_stride_frames));
@@ -941,6 +944,21 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
     }
     if (lowest >= 0 && result.candidates[lowest].ridge != result.candidates[best].ridge)
       round_starts.push_back(lowest);
+    // The rollout rows hold the fit near the data as the ridge does, so a round's best ridge can
+    // lie below the one-step fit's: the next rollout_lower_ridges ridges below the best's too.
+    std::vector<int> lower;
+    for (int k = 0; k < static_cast<int>(result.candidates.size()); ++k) {
+      const SensorMuscleCandidate& c = result.candidates[k];
+      if (c.window_frames == 1 && c.ridge < result.candidates[best].ridge &&
+          std::isfinite(c.validation_rms_m))
+        lower.push_back(k);
+    }
+    std::stable_sort(lower.begin(), lower.end(), [&](int a, int b) {
+      return result.candidates[a].ridge > result.candidates[b].ridge;
+    });
+    for (int k = 0; k < static_cast<int>(lower.size()) && k < o.rollout_lower_ridges; ++k)
+      if (std::find(round_starts.begin(), round_starts.end(), lower[k]) == round_starts.end())
+        round_starts.push_back(lower[k]);
   }
   for (int index : round_starts) {
     const SensorMuscleCandidate start = result.candidates[index];

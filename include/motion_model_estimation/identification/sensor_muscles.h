@@ -10,7 +10,7 @@
 // Every muscle reads all S sensors (2S network inputs: elongations and their speeds), linear
 // (hidden 0), and has its own type: its own network, stiffness and damping. Muscles sit on the
 // model's two-particle bonds with an elongation, on the sensor pairs, between every particle
-// and its `neighbours` nearest (mean distance over the data; none by default), and from every
+// and its `neighbours` nearest (mean distance over the data; 2 by default), and from every
 // particle to each anchor (below), so that every particle can be pushed in three directions.
 //
 // Anchors (`anchors`, on by default, and with `anchors_by_validation` the layout without them
@@ -77,8 +77,9 @@
 // `rollout_correction_frames` (a return in one step asks for drift / h^2: high-gain feedback
 // that took the rollouts off the data when tried); the fit is solved again on all rows gathered
 // (the ridge relative to the one-step rows' mean diagonal). The rounds start from the best
-// window-1 candidate and, when another ridge had a lower validation error with an unbounded
-// rollout, from that one too. Each round is a candidate judged like the others; the chosen
+// window-1 candidate, from the next `rollout_lower_ridges` ridges below its ridge (the rollout
+// rows regularise as the ridge does) and, when another ridge had a lower validation error with
+// an unbounded rollout, from that one too. Each round is a candidate judged like the others; the chosen
 // round count is run again on every frame for the final fit.
 //
 // The muscles' and sensors' parameters are written fixed (identified here, not by the search).
@@ -97,10 +98,14 @@ namespace mme {
 
 struct SensorMuscleOptions {
   int sensors = 16;          ///< sensor bonds every muscle reads (1..kMaxMuscleInputs)
-  /// Muscles from each particle to its nearest particles (0..64). 0 by default: the anchors
-  /// push every particle three ways (4 with the anchors: ~9200 unknowns on subject01 against
-  /// 5985, a solve ~3.5x as long; whether it predicts better was not measured to the end).
-  int neighbours = 0;
+  /// Muscles from each particle to its nearest particles (0..64). 2 by default: with them the
+  /// body holds its shape over long rollouts at lower ridges, whose rounds predict better
+  /// (measured on bench_paper fig5's split, 10 frames ahead held out, with rollout_lower_ridges:
+  /// Sample01 18.25 -> 15.05 mm, subject01 13.18 -> 9.15, motion_capture_walk 7.03 -> 6.93,
+  /// Sample26 10.05 -> 9.97, arm26 0.28 unchanged; on Sample01 without them every refit of the
+  /// lower ridges left the data within the 10x rollout, the body coming apart after ~5 s), at
+  /// about 2-3x the fit's time on the walks (more unknowns, more rounds).
+  int neighbours = 2;
   /// Anchor muscles (see above): three fixed anchor particles far along x, y and z, and a muscle
   /// from every free particle to each.
   bool anchors = true;
@@ -132,6 +137,10 @@ struct SensorMuscleOptions {
   /// subject01 34.24 -> 29.02, Sample01 28.68 -> 27.72, Sample26 and arm26 unchanged (no round
   /// won their validation); each round costs about one more one-step fit.
   int rollout_rounds = 3;
+  /// Rounds also start from this many ridges below the best one-step candidate's (see the
+  /// header: the rollout rows hold the fit near the data as a ridge does). Sample01 (fig5's
+  /// split): ridge 1 after a round (3 was the best one step) predicts 15.05 mm held out.
+  int rollout_lower_ridges = 2;
   int rollout_stride_frames = 2;  ///< starts of the rollout equations, every this many frames
   /// The rollout equations' target: the data's acceleration plus a critically damped return to
   /// the data with this time constant [frames] (0: the data's acceleration alone).
