@@ -215,7 +215,8 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
   return report;
 }
 
-RolloutBound RolloutBound::of(const Model& model, const Observations& obs, int first_frame, int end_frame) {
+RolloutBound RolloutBound::of(const Model& model, const Observations& obs, int first_frame,
+                              int end_frame) {
   const int n = static_cast<int>(model.particles.size());
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (int t = std::max(first_frame, 0); t < std::min(end_frame, obs.frames); ++t)

@@ -48,7 +48,8 @@ struct RolloutBound {
   Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();  ///< the box's centre [m]
   double extent_m = 1e-3;  ///< the box's diagonal [m] (at least 1 mm; 1 mm when nothing is seen)
   /// The box of `model`'s free particles where `obs` sees them in frames [first_frame, end_frame).
-  static RolloutBound of(const Model& model, const Observations& obs, int first_frame, int end_frame);
+  static RolloutBound of(const Model& model, const Observations& obs, int first_frame,
+                         int end_frame);
   /// Every free particle of `model` at `x_m` finite and within kExtents x extent_m of the centre.
   bool holds(const Model& model, const std::vector<Eigen::Vector3d>& x_m) const;
 };

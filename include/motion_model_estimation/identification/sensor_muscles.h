@@ -79,8 +79,8 @@
 // (the ridge relative to the one-step rows' mean diagonal). The rounds start from the best
 // window-1 candidate, from the next `rollout_lower_ridges` ridges below its ridge (the rollout
 // rows regularise as the ridge does) and, when another ridge had a lower validation error with
-// an unbounded rollout, from that one too. Each round is a candidate judged like the others; the chosen
-// round count is run again on every frame for the final fit.
+// an unbounded rollout, from that one too. Each round is a candidate judged like the others;
+// the chosen round count is run again on every frame for the final fit.
 //
 // The muscles' and sensors' parameters are written fixed (identified here, not by the search).
 // Frames where a sensor is unseen, and particles whose bond partners are unseen, drop out.
@@ -104,7 +104,8 @@ struct SensorMuscleOptions {
   /// Sample01 18.25 -> 15.05 mm, subject01 13.18 -> 9.15, motion_capture_walk 7.03 -> 6.93,
   /// Sample26 10.05 -> 9.97, arm26 0.28 unchanged; on Sample01 without them every refit of the
   /// lower ridges left the data within the 10x rollout, the body coming apart after ~5 s), at
-  /// about 2-3x the fit's time on the walks (more unknowns, more rounds).
+  /// 3-4x the fit's time on the walks (more unknowns, more rounds; fig5 beside a CI run:
+  /// motion_capture_walk 1421 s, subject01 832 s, against 426 s and 195 s alone before).
   int neighbours = 2;
   /// Anchor muscles (see above): three fixed anchor particles far along x, y and z, and a muscle
   /// from every free particle to each.
