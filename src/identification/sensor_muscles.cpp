@@ -759,6 +759,9 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
                        "frames, got " + std::to_string(tau_frames));
   if (!(o.min_seen_share >= 0.0 && o.min_seen_share <= 1.0))
     throw InputError("sensor muscles: min_seen_share must be in [0, 1]");
+  if (o.max_unknowns < 1 || o.max_unknowns > kMaxUnknowns)
+    throw InputError("sensor muscles: max_unknowns must be 1.." + std::to_string(kMaxUnknowns) + ", got " +
+                     std::to_string(o.max_unknowns));
   if (!(passive.frame_rate_hz > 0.0)) throw InputError("sensor muscles: the model has no frame rate");
   const int n = static_cast<int>(passive.particles.size());
   if (data.numMarkers() != n)
@@ -782,7 +785,7 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   }
   // Both layouts, judged on the same validation frames: the anchors' extra unknowns fit noise
   // on a small body whose controller lives between its particles, and push along the world
-  // where a walk's accelerations live. A layout too large to fit (kMaxUnknowns) or without a
+  // where a walk's accelerations live. A layout too large to fit (max_unknowns) or without a
   // usable fit leaves the other.
   const auto say = [&](const std::string& line) {
     if (o.progress) o.progress(line);
@@ -831,17 +834,33 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
     if (o.progress) o.progress(line);
   };
 
-  const Layout layout = chooseLayout(passive, data, anchor, o);
+  Layout layout = chooseLayout(passive, data, anchor, o);
   if (layout.sensors.empty())
     throw InputError("sensor muscles: no pair of particles is seen together in " +
                      std::to_string(static_cast<int>(100 * o.min_seen_share)) + " % of the frames");
   if (layout.muscles.empty()) throw InputError("sensor muscles: no pair of particles to put a muscle on");
-  const size_t unknowns = layout.muscles.size() * (2 * layout.sensors.size() + 3);
-  if (unknowns > kMaxUnknowns)
+  const auto unknownsOf = [](const Layout& l) { return l.muscles.size() * (2 * l.sensors.size() + 3); };
+  // A body too large for max_unknowns reads fewer sensors (the most varying pairs are kept):
+  // each muscle then has fewer unknowns, and the sensor pairs' own muscles go with them.
+  while (unknownsOf(layout) > o.max_unknowns && layout.sensors.size() > 1) {
+    const size_t per_muscle = o.max_unknowns / layout.muscles.size();
+    SensorMuscleOptions fewer = o;
+    fewer.sensors = static_cast<int>(std::max<size_t>(
+        1, std::min(layout.sensors.size() - 1, per_muscle > 3 ? (per_muscle - 3) / 2 : 1)));
+    char line[200];
+    std::snprintf(line, sizeof(line),
+                  "sensor muscles: %zu muscles reading %zu sensors are %zu unknowns, more than %zu: "
+                  "%d sensors", layout.muscles.size(), layout.sensors.size(), unknownsOf(layout),
+                  o.max_unknowns, fewer.sensors);
+    say(line);
+    layout = chooseLayout(passive, data, anchor, fewer);
+  }
+  const size_t unknowns = unknownsOf(layout);
+  if (unknowns > o.max_unknowns)
     throw InputError("sensor muscles: " + std::to_string(layout.muscles.size()) + " muscles reading " +
-                     std::to_string(layout.sensors.size()) + " sensors are " + std::to_string(unknowns) +
-                     " unknowns, more than " + std::to_string(kMaxUnknowns) +
-                     " (two dense matrices of that size): fewer sensors or neighbours, or no anchors");
+                     std::to_string(layout.sensors.size()) + " sensor(s) are " + std::to_string(unknowns) +
+                     " unknowns, more than " + std::to_string(o.max_unknowns) +
+                     " (two dense matrices of that size): fewer neighbours, or no anchors");
   Fitter fitter(passive, data, layout, o.nonnegative_own_spring);
   SensorMuscleResult result;
   result.sensors = static_cast<int>(layout.sensors.size());

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <string>
 
 #include "cli_args.h"
@@ -245,10 +246,23 @@ int run(int argc, char** argv) {
 
   mme::Model out_model = r.model;
   std::vector<std::string> notes = r.notes;
+  std::optional<mme::SensorMuscleResult> fitted;
   if (sensor_muscles) {
     // Sensor muscles on the identified model (sensor_muscles.h): fitted by least squares, the
     // ridge chosen on the last 20 % of the frames; kept only where they predict those better.
-    const mme::SensorMuscleResult sm = mme::addSensorMuscles(r.model, trajectory, sensor_options);
+    // The options were checked above, so what fails here is the data's (too few frames, no
+    // pair seen together often enough, a body too large): the identified model is still
+    // written, with a warning, rather than lost.
+    try {
+      fitted = mme::addSensorMuscles(r.model, trajectory, sensor_options);
+    } catch (const mme::InputError& e) {
+      std::fprintf(stderr, "identify: warning: no sensor muscles (%s): the passive model is written\n",
+                   e.what());
+      notes.push_back(std::string("sensor muscles: none (") + e.what() + ")");
+    }
+  }
+  if (fitted) {
+    const mme::SensorMuscleResult& sm = *fitted;
     char line[300];
     std::snprintf(line, sizeof(line),
                   "sensor muscles: %d sensors, %d muscles, ridge %.0e, %d rollout round(s), "

@@ -130,5 +130,16 @@ if grep -q "^identify: sensor muscles: 6 sensors, .*, with anchors;" "$tmp/senso
 else
   [ "$anchors" -eq 0 ]; same_model "$tmp/sensor0.yaml" || { echo "auto without anchors differs from --muscle-anchors 0"; exit 1; }
 fi
+# Data the sensor muscles cannot use (40 frames: too few to hold out a validation 10 frames
+# ahead): the identified passive model is still written, with a warning naming the reason.
+"$bin/simulate" --model "$tmp/muscle.yaml" --frames 40 --out "$tmp/short.trc" >/dev/null
+"$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/short.trc" --out "$tmp/short.yaml" \
+  --cost short_term --sensor-muscles 6 >"$tmp/short.log" 2>"$tmp/short.err" ||
+  { echo "identify failed where only the sensor muscles could not be fitted:"; cat "$tmp/short.err"; exit 1; }
+grep -q "^identify: warning: no sensor muscles (sensor muscles: 40 frames are too few .*): the passive model is written" \
+  "$tmp/short.err" || { echo "no warning:"; cat "$tmp/short.err"; exit 1; }
+[ -s "$tmp/short.yaml" ] && ! grep -q "kind: muscle" "$tmp/short.yaml"
+grep -q "sensor muscles: none (sensor muscles: 40 frames are too few" "$tmp/short.yaml" ||
+  { echo "the written model's notes do not say why it has no sensor muscles"; exit 1; }
 
 echo "muscle: README example simulated, identified, exported and reloaded; bad definitions refused; muscles placed on a passive fit lower its cost; sensor muscles predict its held-out frames better"

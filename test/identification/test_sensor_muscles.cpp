@@ -444,6 +444,37 @@ TEST(SensorMuscles, TheWrittenModelMovesAsTheFittedOne) {
   EXPECT_LT(worst, 1e-9);
 }
 
+TEST(SensorMuscles, ABodyTooLargeReadsFewerSensors) {
+  // With the anchors, the 4-particle object has 15 muscles: 6 sensors are 15 x 15 = 225
+  // unknowns. Within 120, every muscle reads the 2 most varying pairs (15 x 7 = 105): the layout
+  // shrinks instead of failing, and says so.
+  const LinearControllerCase setup;
+  mme::SensorMuscleOptions o = smallOptions();
+  o.max_unknowns = 120;
+  std::vector<std::string> lines;
+  o.progress = [&](const std::string& line) { lines.push_back(line); };
+  const mme::SensorMuscleResult r = mme::addSensorMuscles(setup.passive, mme::sliceFrames(setup.data, 0, kFitted), o);
+  EXPECT_EQ(r.sensors, 2);
+  EXPECT_EQ(r.muscles, 15);
+  EXPECT_EQ(r.unknowns, 105u);
+  int sensor_bonds = 0;
+  for (const mme::Bond& bond : r.model.bonds) sensor_bonds += bond.name.rfind("sensor_", 0) == 0;
+  EXPECT_EQ(sensor_bonds, 2);
+  ASSERT_FALSE(lines.empty());
+  EXPECT_NE(std::find(lines.begin(), lines.end(),
+                      "sensor muscles: 15 muscles reading 6 sensors are 225 unknowns, more than 120: 2 sensors"),
+            lines.end());
+  // The sensors kept are the most varying pairs: the first two of the full layout's.
+  const mme::SensorMuscleResult full =
+      mme::addSensorMuscles(setup.passive, mme::sliceFrames(setup.data, 0, kFitted), smallOptions());
+  std::vector<std::string> kept, first;
+  for (const mme::Bond& bond : r.model.bonds)
+    if (bond.name.rfind("sensor_", 0) == 0) kept.push_back(bond.name);
+  for (const mme::Bond& bond : full.model.bonds)
+    if (bond.name.rfind("sensor_", 0) == 0 && first.size() < 2) first.push_back(bond.name);
+  EXPECT_EQ(kept, first);
+}
+
 TEST(SensorMuscles, BadInputGetsClearErrors) {
   const Model truth = mme::test::muscleObject();
   const mme::Trajectory data = mme::simulateTrajectory(truth, 100, truth.frame_rate_hz);
@@ -498,9 +529,16 @@ TEST(SensorMuscles, BadInputGetsClearErrors) {
   const mme::Trajectory crowd_data = mme::simulateTrajectory(crowd, 80, crowd.frame_rate_hz);
   o = smallOptions();
   o.sensors = 16;
-  o.neighbours = 59;
+  o.neighbours = 59;  // 1770 muscles + 180 to the anchors: 9750 unknowns even with one sensor
+  o.max_unknowns = 8000;
   const std::string crowded = message(crowd, crowd_data, o);
-  EXPECT_NE(crowded.find("unknowns, more than 14000"), std::string::npos) << crowded;
+  EXPECT_NE(crowded.find("1950 muscles reading 1 sensor(s) are 9750 unknowns, more than 8000"),
+            std::string::npos) << crowded;
+  for (size_t bad : {size_t{0}, size_t{14001}}) {
+    o = smallOptions();
+    o.max_unknowns = bad;
+    EXPECT_NE(message(passive, data, o).find("max_unknowns must be 1..14000"), std::string::npos) << bad;
+  }
   mme::Trajectory renamed = data;
   renamed.marker_names[1] = "elsewhere";
   EXPECT_NE(message(passive, renamed, smallOptions()).find("'elsewhere'"), std::string::npos);
