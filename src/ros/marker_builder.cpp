@@ -113,10 +113,14 @@ visualization_msgs::MarkerArray buildMarkers(const VisualisationSnapshot& s,
   text.scale.z = 2.0 * d;
   text.color = rgba(1.0f, 1.0f, 1.0f, 1.0f);
   text.text = s.text;
+  // Above the seen markers: an occluded sample holds no position (the window keeps 0, 0, 0
+  // there), and a particle without a marker (an anchor) is never seen.
   Eigen::Vector3d top = Eigen::Vector3d::Zero();
-  if (!s.observed.empty()) {
-    top = s.observed[0];
-    for (const Eigen::Vector3d& x : s.observed) top = top.cwiseMax(x);
+  bool any = false;
+  for (size_t i = 0; i < s.observed.size(); ++i) {
+    if (i < s.observed_occluded.size() && s.observed_occluded[i]) continue;
+    top = any ? top.cwiseMax(s.observed[i]) : s.observed[i];
+    any = true;
   }
   text.pose.position = toPoint(top + Eigen::Vector3d(0, 0, 4.0 * d));
   out.markers.push_back(text);
