@@ -602,6 +602,10 @@ class Fitter {
 /// (2 x 1.6 GB at 14000).
 constexpr size_t kMaxUnknowns = 14000;
 
+/// The sensor muscles are kept when they predict the validation frames better than the passive
+/// model by this share of the larger of its and the constant-velocity guess's errors.
+constexpr double kKeepMargin = 0.01;
+
 /// A relative ridge as the progress lines write it ("3e+00").
 std::string formatRidge(double ridge) {
   char text[32];
@@ -1114,17 +1118,24 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
   result.ridge = chosen.ridge;
   result.activation_time_s = activation.time_s;
   result.validation_rms_m = activation.validation_rms_m;
-  result.better_than_passive =
-      final_bounded && chosen.bounded && result.validation_rms_m < result.passive_rms_m;
+  // Better by a margin: 1 % of the larger of the passive model's and the constant-velocity
+  // guess's errors (the guess gives the motion's scale). Where the passive model already
+  // explains the data (synthetic data without a controller, noiseless or not), a fit of its
+  // residue is no better than the passive model in any sense that matters, and without the
+  // margin round-off decided whether silent muscles were written.
+  const double margin_m = kKeepMargin * std::max(result.passive_rms_m, result.constant_velocity_rms_m);
+  const bool better = result.validation_rms_m < result.passive_rms_m - margin_m;
+  result.better_than_passive = final_bounded && chosen.bounded && better;
   char why[240] = "";
   if (!chosen.bounded)
     std::snprintf(why, sizeof(why), "no candidate's 10x validation rollout stayed bounded");
   else if (!final_bounded)
     std::snprintf(why, sizeof(why), "every refit on all frames tried (%zu) left the data over its "
                   "10x rollouts", order.size());
-  else if (!(result.validation_rms_m < result.passive_rms_m))
+  else if (!better)
     std::snprintf(why, sizeof(why), "its validation error %.3g m is not below the passive model's "
-                  "%.3g m", result.validation_rms_m, result.passive_rms_m);
+                  "%.3g m by %.3g m, 1 %% of the larger of it and the constant-velocity guess's",
+                  result.validation_rms_m, result.passive_rms_m, margin_m);
   result.not_kept_because = why;
   result.rows = sys.rows;
   // A row sums window^2 frames' a h^2 (the triangle's weights): per frame, divided by that.

@@ -100,6 +100,20 @@ if grep -q "kind:" "$tmp/particles.yaml"; then echo "FAIL: a bond type in the pa
 grep -q "no --model: the 3 markers of $tmp/arm.bag are the particles" "$tmp/id.log"
 grep -q "<- chosen" "$tmp/id.log"
 grep -q "kind:" "$tmp/arm.yaml"
+# With --select-structure the sensor muscles are on by default (the default preset): arm26's
+# elbow is driven, so they are written, and the report names them; --sensor-muscles 0 and the
+# paper's preset write the passive model alone.
+grep -q "^identify: sensor muscles: 3 sensors, [0-9]* muscles, .*anchors; 10 frames ahead" "$tmp/id.log" ||
+  { echo "no sensor muscles by default with --select-structure:"; grep "sensor muscles" "$tmp/id.log"; exit 1; }
+[ "$(grep -c "kind: muscle" "$tmp/arm.yaml")" -gt 0 ] || { echo "arm.yaml has no muscle"; exit 1; }
+for off in "--sensor-muscles 0" "--preset paper --generations 30"; do
+  # shellcheck disable=SC2086
+  "$bin/identify" --select-structure --trajectory "$tmp/arm.bag" --out "$tmp/arm_passive.yaml" --quiet $off \
+    >"$tmp/id_passive.log"
+  grep -q "<- chosen" "$tmp/id_passive.log"
+  ! grep -q "sensor muscles" "$tmp/id_passive.log" || { echo "$off: sensor muscles fitted"; exit 1; }
+  ! grep -q "kind: muscle" "$tmp/arm_passive.yaml" || { echo "$off: a muscle written"; exit 1; }
+done
 # ... and the particles file identify and the node start from.
 "$bin/identify" --select-structure --model "$tmp/particles.yaml" --trajectory "$tmp/piece.bag" \
   --out "$tmp/piece.yaml" --quiet >/dev/null

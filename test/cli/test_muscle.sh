@@ -73,8 +73,9 @@ grep -q "inputs: \[" "$tmp/muscled.yaml"
 "$bin/simulate" --model "$tmp/muscled.yaml" --frames 20 --out "$tmp/muscled.trc" >/dev/null
 # Out of range or nothing to place: exit 2 and the reason.
 for bad in "--add-muscles 17|--add-muscles must be" "--muscle-hidden -1|--muscle-hidden must be" \
-           "--sensor-muscles 0|--sensor-muscles must be" "--muscle-neighbours 65|--muscle-neighbours must be" \
-           "--rollout-rounds 21|--rollout-rounds must be" "--muscle-anchors 2|--muscle-anchors must be"; do
+           "--sensor-muscles 17|--sensor-muscles must be" "--muscle-neighbours 65|--muscle-neighbours must be" \
+           "--rollout-rounds 21|--rollout-rounds must be" "--muscle-anchors 2|--muscle-anchors must be" \
+           "--sensor-muscles 0 --muscle-neighbours 2|need sensor muscles (--sensor-muscles 0 turns them off)"; do
   set +e
   "$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/x.yaml" \
     ${bad%%|*} 2>"$tmp/bad3.err" >/dev/null

@@ -182,7 +182,9 @@ struct SensorMuscleResult {
   double validation_rms_m = 0.0;         ///< its validation RMS horizon ahead (with it)
   double passive_rms_m = 0.0;            ///< the passive model on the same validation frames
   double constant_velocity_rms_m = 0.0;  ///< the constant-velocity guess there
-  /// The chosen fit predicted the validation frames better than the passive model, its rollout
+  /// The chosen fit predicted the validation frames better than the passive model (by 1 % of
+  /// the larger of its and the constant-velocity guess's errors: a fit of the residue of a
+  /// passive model that already explains the data is not kept), its rollout
   /// bounded, and its refit on every frame stays bounded over 10x rollouts from the validation
   /// start and from 8 frames spread over the data (a refit that does not is replaced by the next
   /// candidate, up to 4 tried); when false, keep the passive model.
