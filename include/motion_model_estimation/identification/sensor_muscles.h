@@ -151,9 +151,10 @@ struct SensorMuscleOptions {
   double min_seen_share = 0.9;
   /// The linear unknowns at most (muscles x (2 sensors + 3), 1..14000): the normal matrix and
   /// its factor are two dense squares of this size (2 x 1.6 GB at 14000; a solve there is
-  /// ~10^12 flops, up to 6 per ridge). A layout above it reads fewer sensors, the most varying pairs kept, until it fits
-  /// (a capture of ~65 markers or more with the anchors, ~100 without); when even one sensor is
-  /// too many, InputError (with anchors_by_validation, the other layout is kept).
+  /// ~10^12 flops, up to 6 per ridge). A layout above it reads fewer sensors, the most varying
+  /// pairs kept, until it fits (a capture of ~65 markers or more with the anchors, ~100
+  /// without); when even one sensor is too many, InputError (with anchors_by_validation, the
+  /// other layout is kept).
   size_t max_unknowns = 14000;
   std::function<void(const std::string&)> progress;  ///< one line per step (may be empty)
 };
