@@ -50,7 +50,8 @@ TEST(MarkerBuilder, TheStatusTextStandsAboveTheSeenMarkers) {
   // metres away from it.
   mme::MarkerStyle style;
   style.particle_diameter_m = 0.02;
-  const Marker& text = find(mme::buildMarkers(bodyWithAGap(), style), "status", 0);
+  const MarkerArray a = mme::buildMarkers(bodyWithAGap(), style);  // outlives the reference
+  const Marker& text = find(a, "status", 0);
   EXPECT_EQ(text.text, "generation 3");
   EXPECT_DOUBLE_EQ(text.pose.position.x, -4.0);
   EXPECT_DOUBLE_EQ(text.pose.position.y, -2.5);
