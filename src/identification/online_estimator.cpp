@@ -9,7 +9,9 @@
 #include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/core/observations.h"
 #include "motion_model_estimation/identification/output_error.h"
+#include "motion_model_estimation/identification/prediction_error.h"
 #include "motion_model_estimation/identification/threshold_search.h"
 
 namespace mme {
@@ -224,15 +226,35 @@ double OnlineEstimator::frameRateHz() const {
 
 Trajectory OnlineEstimator::rollout(const Model& model, const Trajectory& window, int frames) {
   Trajectory empty;
-  if (window.numFrames() < 2 || frames < 1) return empty;
-  for (int i = 0; i < window.numMarkers(); ++i)
-    if (window.isOccluded(0, i) || window.isOccluded(1, i)) return empty;
+  const int n = window.numMarkers();
+  if (window.numFrames() < 2 || frames < 1 || n != static_cast<int>(model.particles.size()))
+    return empty;
   const double rate_hz = model.frame_rate_hz > 0 ? model.frame_rate_hz : window.frame_rate_hz;
   if (!(rate_hz > 0)) return empty;
+  Observations obs;
+  bool any_hidden = false;
+  for (int i = 0; i < n; ++i)
+    any_hidden = any_hidden || window.isOccluded(0, i) || window.isOccluded(1, i);
+  if (any_hidden) {
+    try {
+      obs = prepareObservations(model, window);
+    } catch (const InputError&) {
+      return empty;
+    }
+  }
   Model start = model;
-  for (int i = 0; i < window.numMarkers(); ++i) {
-    start.particles[i].position_m = window.position(1, i);
-    start.particles[i].velocity_mps = (window.position(1, i) - window.position(0, i)) * rate_hz;
+  for (int i = 0; i < n; ++i) {
+    Particle& p = start.particles[i];
+    if (p.fixed) {  // held: at its marker when seen, else where the model puts it (an anchor)
+      if (!window.isOccluded(1, i)) p.position_m = window.position(1, i);
+      p.velocity_mps.setZero();
+      continue;
+    }
+    Eigen::Vector3d x0 = window.position(0, i), x1 = window.position(1, i);
+    if (window.isOccluded(0, i) && !fillFromNeighbours(obs, model, 0, i, &x0, true)) return empty;
+    if (window.isOccluded(1, i) && !fillFromNeighbours(obs, model, 1, i, &x1, true)) return empty;
+    p.position_m = x1;
+    p.velocity_mps = (x1 - x0) * rate_hz;
   }
   return simulateTrajectory(start, frames, rate_hz);
 }
@@ -366,20 +388,23 @@ bool OnlineEstimator::update() {
       static_cast<int>(options_.stability_rollout_factor * window_data.numFrames());
   const Trajectory long_run = rollout(best, window_data, rollout_frames);
   if (!long_run.positions_m.empty()) {
+    // The box of the free particles where the window sees them; fixed ones stay put and may lie
+    // far away (anchors), as in evaluate's RolloutBound.
+    const int n = window_data.numMarkers();
+    const auto free_particle = [&](size_t k) { return !best.particles[k % n].fixed; };
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
     for (size_t k = 0; k < window_data.positions_m.size(); ++k)
-      if (!window_data.occluded[k]) {
+      if (!window_data.occluded[k] && free_particle(k)) {
         lo = lo.cwiseMin(window_data.positions_m[k]);
         hi = hi.cwiseMax(window_data.positions_m[k]);
       }
     const Eigen::Vector3d centre = 0.5 * (lo + hi);
     const double limit_m = 10.0 * std::max((hi - lo).norm(), 1e-3);
-    e.stable = true;
-    for (const Eigen::Vector3d& x : long_run.positions_m)
-      if (!x.allFinite() || (x - centre).norm() > limit_m) {
+    e.stable = (hi - lo).minCoeff() >= 0.0;  // something free seen
+    for (size_t k = 0; e.stable && k < long_run.positions_m.size(); ++k)
+      if (free_particle(k) && (!long_run.positions_m[k].allFinite() ||
+                               (long_run.positions_m[k] - centre).norm() > limit_m))
         e.stable = false;
-        break;
-      }
   }
   // A reset() or replaceModel() during this update makes its result stale: drop it.
   std::lock_guard<std::mutex> model_lock(model_mutex_);

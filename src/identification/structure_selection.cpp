@@ -1053,12 +1053,14 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       IdentifyOptions io = options.identify;
       io.cost = CostChoice::kShortTerm;  // ranking only: the final fit is the caller's
       io.generations = std::min(io.generations, options.refit_generations);
-      io.max_wall_time_s = io.max_wall_time_s > 0.0 ? std::min(io.max_wall_time_s, options.refit_max_s)
-                                                    : options.refit_max_s;
       io.estimate_std = false;
       const IdentifyResult r = identifyModel(cand->model, fit, io);
       cand->model = r.model;
       cand->refit_cost_m2 = r.global_cost;
+      char line[160];
+      std::snprintf(line, sizeof(line), "structure: %s: refit %d generations (%s), %.1f s",
+                    cand->name.c_str(), r.generations, identifyStopName(r.stop), r.wall_time_s);
+      say(line);
     }
     cand->parameters = static_cast<int>(freeParameters(cand->model).size());
     heldOutErrors(cand->model, held, split.held_start, cand);

@@ -38,6 +38,9 @@ std::optional<VisualisationSnapshot> makeVisualisationSnapshot(const Model& mode
   for (int i = 0; i < n; ++i) {
     scene.observed.push_back(window.position(frames - 1, i));
     scene.observed_occluded.push_back(window.isOccluded(frames - 1, i));
+    bool never_seen = model.particles[i].fixed;
+    for (int t = 0; never_seen && t < frames; ++t) never_seen = window.isOccluded(t, i);
+    scene.model_only.push_back(never_seen);
   }
   if (frames >= 3) {
     // One-step prediction of the latest frame from the two before it.

@@ -69,23 +69,31 @@ visualization_msgs::MarkerArray buildMarkers(const VisualisationSnapshot& s,
   Marker predicted = base(header, "predicted", 0, Marker::SPHERE_LIST);
   predicted.scale.x = predicted.scale.y = predicted.scale.z = 0.7 * d;
   predicted.color = rgba(1.0f, 0.6f, 0.0f, 0.9f);
-  for (const Eigen::Vector3d& x : s.predicted) predicted.points.push_back(toPoint(x));
+  // A point of the model without a marker (an anchor far off the body) is not drawn: it would
+  // stand metres away and stretch rviz's view.
+  const auto drawn = [&](size_t i) { return i >= s.model_only.size() || !s.model_only[i]; };
+  for (size_t i = 0; i < s.predicted.size(); ++i)
+    if (drawn(i)) predicted.points.push_back(toPoint(s.predicted[i]));
   out.markers.push_back(predicted);
 
   Marker recon = base(header, "reconstruction", 0, Marker::SPHERE_LIST);
   recon.scale.x = recon.scale.y = recon.scale.z = 0.7 * d;
   recon.color = rgba(0.2f, 0.4f, 1.0f, 0.9f);
-  for (const Eigen::Vector3d& x : s.reconstructed) recon.points.push_back(toPoint(x));
+  for (size_t i = 0; i < s.reconstructed.size(); ++i)
+    if (drawn(i)) recon.points.push_back(toPoint(s.reconstructed[i]));
   out.markers.push_back(recon);
 
   Marker trails = base(header, "reconstruction", 1, Marker::LINE_LIST);
   trails.scale.x = 0.15 * d;
   trails.color = rgba(0.2f, 0.4f, 1.0f, 0.4f);
-  for (const auto& path : s.reconstruction_trails)
+  for (size_t i = 0; i < s.reconstruction_trails.size(); ++i) {
+    if (!drawn(i)) continue;
+    const auto& path = s.reconstruction_trails[i];
     for (size_t k = 1; k < path.size(); ++k) {
       trails.points.push_back(toPoint(path[k - 1]));
       trails.points.push_back(toPoint(path[k]));
     }
+  }
   out.markers.push_back(trails);
 
   Marker bonds = base(header, "bonds", 0, Marker::LINE_LIST);

@@ -148,7 +148,8 @@ TEST_F(Fixture, OcclusionHidesWhatCannotBeComputed) {
   EXPECT_EQ(s->observed_occluded, (std::vector<uint8_t>{0, 1, 0}));
   EXPECT_EQ(s->predicted.size(), 3u);
   EXPECT_EQ(s->reconstructed.size(), 3u);
-  // Occluded at the window start: no reconstruction (no start state), the prediction stays.
+  // Occluded at the window start with two neighbours only (3 are needed to place it): no
+  // reconstruction (no start state), the prediction stays.
   w = window(0, 20);
   w.occluded[0 * 3 + 2] = 1;
   s = mme::makeVisualisationSnapshot(model, w, estimate(), mme::BondColouring::kStrain);
@@ -163,6 +164,38 @@ TEST_F(Fixture, OcclusionHidesWhatCannotBeComputed) {
   ASSERT_TRUE(s);
   EXPECT_TRUE(s->predicted.empty());
   EXPECT_EQ(s->reconstructed.size(), 3u);
+}
+
+TEST_F(Fixture, AFixedParticleNeverSeenIsAPointOfTheModelOnly) {
+  // c fixed where it is (an anchor has no marker: hidden in every frame); a and b keep moving.
+  mme::Model anchored = model;
+  anchored.particles[2].fixed = true;
+  anchored.particles[2].velocity_mps.setZero();
+  const mme::Trajectory motion = mme::simulateTrajectory(anchored, 20, 100.0);
+  mme::Trajectory w = motion;
+  for (int t = 0; t < w.numFrames(); ++t) {
+    w.occluded[t * 3 + 2] = 1;
+    w.position(t, 2).setZero();
+  }
+  auto s = mme::makeVisualisationSnapshot(anchored, w, estimate(), mme::BondColouring::kStrain);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->model_only, (std::vector<uint8_t>{0, 0, 1}));
+  // The model still predicts the seen particles (and places the anchor where it is fixed).
+  ASSERT_EQ(s->predicted.size(), 3u);
+  EXPECT_LT((s->predicted[0] - motion.position(19, 0)).norm(), 1e-12);
+  EXPECT_LT((s->predicted[2] - anchored.particles[2].position_m).norm(), 1e-12);
+  // Seen once in the window: a marker (a fixed pivot with a marker is drawn).
+  w.occluded[5 * 3 + 2] = 0;
+  w.position(5, 2) = motion.position(5, 2);
+  s = mme::makeVisualisationSnapshot(anchored, w, estimate(), mme::BondColouring::kStrain);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->model_only, (std::vector<uint8_t>{0, 0, 0}));
+  // A free particle hidden throughout is a hidden marker, not a point of the model only.
+  w = window(0, 20);
+  for (int t = 0; t < w.numFrames(); ++t) w.occluded[t * 3 + 1] = 1;
+  s = mme::makeVisualisationSnapshot(model, w, estimate(), mme::BondColouring::kStrain);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->model_only, (std::vector<uint8_t>{0, 0, 0}));
 }
 
 TEST_F(Fixture, ShortWindowsAndMismatchedModels) {

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <tuple>
 
 #include "motion_model_estimation/ros/marker_builder.h"
 
@@ -43,6 +44,28 @@ TEST(MarkerBuilder, OnlySeenMarkersAreDrawnAsObservedAndBonded) {
   EXPECT_DOUBLE_EQ(observed.header.stamp.toSec(), 12.5);
   EXPECT_EQ(find(a, "predicted", 0).points.size(), 3u);  // the model places the hidden one
   EXPECT_EQ(find(a, "bonds", 0).points.size(), 2u);      // the bond to the hidden marker is not drawn
+}
+
+TEST(MarkerBuilder, APointOfTheModelWithoutAMarkerIsNotDrawn) {
+  // The third particle an anchor 20 m off: drawn, it would stretch rviz's view to it.
+  mme::VisualisationSnapshot s = bodyWithAGap();
+  s.predicted[2] = {20.0, 20.0, 20.0};
+  s.reconstructed = s.predicted;
+  s.reconstruction_trails = {{s.predicted[0], s.predicted[0]}, {s.predicted[1], s.predicted[1]},
+                             {s.predicted[2], s.predicted[2]}};
+  s.model_only = {0, 0, 1};
+  const MarkerArray a = mme::buildMarkers(s, mme::MarkerStyle());
+  for (const auto& [ns, id, points] : {std::make_tuple("predicted", 0, 2u),
+                                        std::make_tuple("reconstruction", 0, 2u),
+                                        std::make_tuple("reconstruction", 1, 4u)}) {
+    const Marker& m = find(a, ns, id);
+    EXPECT_EQ(m.points.size(), points) << ns << "/" << id;
+    for (const auto& p : m.points) EXPECT_LT(p.x, 0.0) << ns << "/" << id;
+  }
+  // A hidden marker (not model-only) is still placed by the model.
+  s.model_only = {0, 0, 0};
+  const MarkerArray all = mme::buildMarkers(s, mme::MarkerStyle());
+  EXPECT_EQ(find(all, "predicted", 0).points.size(), 3u);
 }
 
 TEST(MarkerBuilder, TheStatusTextStandsAboveTheSeenMarkers) {

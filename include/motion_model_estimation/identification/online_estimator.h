@@ -123,7 +123,10 @@ class OnlineEstimator {
   std::vector<std::string> particleNames() const;  ///< model particle order (thread-safe copy)
   double frameRateHz() const;
   /// Simulates `frames` frames of `model` from the first two frames of `window` (positions and
-  /// finite-difference velocity); empty when the window is too short or occluded there.
+  /// finite-difference velocity). A fixed particle starts where the model holds it (an anchor
+  /// has no marker); a free one hidden in either frame is placed there by its neighbours' rigid
+  /// motion (fillFromNeighbours, later frames of the window too). Empty when the window is too
+  /// short, is not the model's particles, or a hidden free particle cannot be placed.
   static Trajectory rollout(const Model& model, const Trajectory& window, int frames);
 
  private:

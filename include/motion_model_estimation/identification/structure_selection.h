@@ -57,8 +57,10 @@ struct StructureOptions {
   /// (a cable, a contact), refined by identify's threshold search in the refit.
   bool try_conditional = true;
   bool refit = true;              ///< refit each level with identifyModel (else equation error only)
-  int refit_generations = 100;    ///< the ranking refit's generation budget per level
-  double refit_max_s = 20.0;      ///< ... and wall time [s]
+  /// The ranking refit's generation budget per level. No wall-time limit of its own (one made
+  /// the chosen structure depend on the machine's load); identify.max_wall_time_s, when set,
+  /// still bounds each refit.
+  int refit_generations = 100;
   IdentifyOptions identify;       ///< the refits' settings
   std::function<void(const std::string&)> progress;  ///< a line per step (may be empty)
 };

@@ -33,6 +33,9 @@ struct VisualisationSnapshot {
   double stamp_s = 0.0;                        ///< [s] input time of the latest observed frame
   std::vector<Eigen::Vector3d> observed;       ///< [m] latest observed frame, particle order
   std::vector<uint8_t> observed_occluded;      ///< 1 = occluded in it
+  /// 1 = a fixed particle hidden in every frame of the window: a point of the model without a
+  /// marker (the sensor muscles' anchors, 20 body extents away), not drawn as a particle.
+  std::vector<uint8_t> model_only;
   std::vector<Eigen::Vector3d> predicted;      ///< [m] its one-step prediction (may be empty)
   std::vector<Eigen::Vector3d> reconstructed;  ///< [m] long reconstruction there (may be empty)
   std::vector<std::vector<Eigen::Vector3d>> reconstruction_trails;  ///< per particle path [m]
