@@ -264,12 +264,13 @@ ShortTermCost::ShortTermCost(const Model& model, const Trajectory& trajectory)
   const int t_last = static_mode ? 0 : num_frames - 2;  // inclusive
   for (int t = t_first; t <= t_last; ++t) {
     const int tp = static_mode ? 0 : t - 1, tn = static_mode ? 0 : t + 1;
-    // Particles lacking x(t) or x(t-1), spread `substeps` hops over the bond graph: a force
-    // reaches one bond further per substep.
+    // Free particles lacking x(t) or x(t-1), spread `substeps` hops over the bond graph: a
+    // force reaches one bond further per substep. A fixed one is where it always is, seen or
+    // not (an anchor without a marker: the model's position, see prepareObservations).
     std::fill(dropped.begin(), dropped.end(), 0);
     frontier.clear();
     for (int i = 0; i < n; ++i)
-      if (trajectory.isOccluded(t, i) || trajectory.isOccluded(tp, i)) {
+      if (!model.particles[i].fixed && (trajectory.isOccluded(t, i) || trajectory.isOccluded(tp, i))) {
         dropped[i] = 1;
         frontier.push_back(i);
       }

@@ -214,6 +214,30 @@ TEST(Cost, FullyOccludedParticleKeepsCostFinite) {
   EXPECT_TRUE(std::isfinite(cost.evaluate(getValues(model, cost.freeParameters()), nullptr)));
 }
 
+// A fixed particle is where the model holds it, seen or not: hiding it in every frame (an
+// anchor without a marker) drops its own terms only, not its neighbours' (they once all went,
+// and a model with anchors, every particle bonded to one, had no term at all).
+TEST(Cost, AHiddenFixedParticleDropsOnlyItsOwnTerms) {
+  const Model model = sheetModel();
+  ASSERT_TRUE(model.particles[0].fixed);
+  const Trajectory full = simulateTrajectory(model, 12, 100.0);
+  Trajectory hidden = full;
+  for (int t = 0; t < hidden.numFrames(); ++t) {
+    hidden.occluded[t * 12 + 0] = 1;
+    hidden.position(t, 0) = Vec::Zero();
+  }
+  ShortTermCost cf(model, full), ch(model, hidden);
+  EXPECT_EQ(cf.termCount() - ch.termCount(), 10u);  // (0, t) for t = 1..10
+  std::vector<double> p = getValues(model, cf.freeParameters());
+  EXPECT_LT(ch.evaluate(p, nullptr), 1e-24);
+  p[0] *= 1.3;
+  std::vector<double> lf, lh;
+  cf.evaluate(p, &lf);
+  ch.evaluate(p, &lh);
+  EXPECT_GT(lh[1], 0.0);
+  for (int i = 1; i < 12; ++i) EXPECT_EQ(lh[i], lf[i]) << "particle " << i;
+}
+
 Trajectory singleFrame(const Model& model) {
   Trajectory traj;
   for (const Particle& p : model.particles) traj.marker_names.push_back(p.name);
