@@ -7,7 +7,8 @@
 //  - Start velocity v(t) = (x(t) - x(t-1))/h for free particles; fixed particles keep the
 //    model's velocity (what the Simulator does), and unknown velocities are 0.
 //  - Occluded positions are replaced by the particle's last known one (else its first known,
-//    else the model's): finite, and every term they could reach is dropped anyway.
+//    else the model's): finite, and every term they could reach is dropped anyway, except for
+//    a fixed particle's, which is where it always is (an anchor: the model's position).
 //  - Interaction candidates are found once per frame at x(t) within a radius of: max_distance
 //    when it is fixed (plus, with substeps > 1, a margin of twice the fastest observed
 //    displacement in the frame, for pairs that close in during the frame); its upper bound

@@ -20,8 +20,10 @@ namespace mme {
 /// From observed x(t-1), x(t): v(t) = (x(t) - x(t-1))/h, one frame (substeps) of the motion law,
 /// compared with observed x(t+1): local_cost(i) = sum_t |xhat_i(t+1) - x_i(t+1)|^2 [m^2].
 /// A trajectory of a single frame is a static equilibrium: x(t-1) = x(t) = x(t+1) = that frame.
-/// Occlusion: term (i, t) is dropped when x_i(t+1) is occluded or any particle within
-/// `substeps` bond hops of i (i included) lacks x(t) or x(t-1); interaction groups: when a
+/// Occlusion: term (i, t) is dropped when x_i(t+1) is occluded or any free particle within
+/// `substeps` bond hops of i (i included) lacks x(t) or x(t-1) (a fixed particle is where it
+/// always is: its last seen position, else the model's, as for an anchor without a marker);
+/// interaction groups: when a
 /// particle of a group is occluded at t or t-1, every particle of groups interacting with it is
 /// dropped for that frame (its neighbours are unknown).
 class ShortTermCost final : public Cost {
