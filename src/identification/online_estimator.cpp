@@ -380,31 +380,23 @@ bool OnlineEstimator::update() {
     else if (side > 0) e.parameter_flags[k] = "at_upper_bound";
     else if (from_output_error && output_error_.unidentifiable[k]) e.parameter_flags[k] = "unidentifiable";
   }
-  // Stability: a long rollout of the best model from the window start stays bounded (finite
-  // and within 10x the window's extent around its centre).
+  // Stability: a long rollout of the best model from the window start keeps its free particles
+  // near the box the window sees them in (RolloutBound, as evaluate judges; fixed ones, such as
+  // anchors far off the body, are not judged). No rollout (a hidden free particle that cannot be
+  // placed, which is also the case when no free particle is seen): not stable.
   Model best = model;
   setValues(best, es_->space().refs(), e.values);
   const int rollout_frames =
       static_cast<int>(options_.stability_rollout_factor * window_data.numFrames());
   const Trajectory long_run = rollout(best, window_data, rollout_frames);
   if (!long_run.positions_m.empty()) {
-    // The box of the free particles where the window sees them; fixed ones stay put and may lie
-    // far away (anchors), as in evaluate's RolloutBound.
-    const int n = window_data.numMarkers();
-    const auto free_particle = [&](size_t k) { return !best.particles[k % n].fixed; };
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
-    for (size_t k = 0; k < window_data.positions_m.size(); ++k)
-      if (!window_data.occluded[k] && free_particle(k)) {
-        lo = lo.cwiseMin(window_data.positions_m[k]);
-        hi = hi.cwiseMax(window_data.positions_m[k]);
-      }
-    const Eigen::Vector3d centre = 0.5 * (lo + hi);
-    const double limit_m = 10.0 * std::max((hi - lo).norm(), 1e-3);
-    e.stable = (hi - lo).minCoeff() >= 0.0;  // something free seen
-    for (size_t k = 0; e.stable && k < long_run.positions_m.size(); ++k)
-      if (free_particle(k) && (!long_run.positions_m[k].allFinite() ||
-                               (long_run.positions_m[k] - centre).norm() > limit_m))
-        e.stable = false;
+    const RolloutBound bound =
+        RolloutBound::of(best, prepareObservations(best, window_data), 0, window_data.numFrames());
+    const auto first = long_run.positions_m.begin();
+    const int n = long_run.numMarkers();
+    e.stable = true;
+    for (int t = 0; e.stable && t < long_run.numFrames(); ++t)
+      e.stable = bound.holds(best, std::vector<Eigen::Vector3d>(first + t * n, first + (t + 1) * n));
   }
   // A reset() or replaceModel() during this update makes its result stale: drop it.
   std::lock_guard<std::mutex> model_lock(model_mutex_);
