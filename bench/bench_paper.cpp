@@ -820,9 +820,12 @@ void figure5(const Settings& s) {
         const mme::SensorMuscleResult sr = mme::addSensorMuscles(dampers_fit, fit, sm);
         wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
         std::printf("fig5: %s: sensor muscles chosen: ridge %.0e, %d rollout round(s), activation "
-                    "time constant %g s%s\n", c.name.c_str(), sr.ridge,
-                    sr.candidates[sr.chosen].rollout_rounds, sr.activation_time_s,
-                    sr.better_than_passive ? "" : " (not better than the passive model)");
+                    "time constant %g s, %s anchors%s (the body travels %.2f body sizes)%s\n",
+                    c.name.c_str(), sr.ridge, sr.candidates[sr.chosen].rollout_rounds,
+                    sr.activation_time_s, sr.anchors ? "with" : "without",
+                    !sr.anchors ? "" : sr.anchor_stiffness ? " with a stiffness of their own"
+                                                           : " without a stiffness of their own",
+                    sr.body_travel, sr.better_than_passive ? "" : " (not better than the passive model)");
         fitted = sr.model;
         parameters = mme::freeParameters(dampers_fit).size() + sr.unknowns;
         cost_m2 = sr.residual_rms_m * sr.residual_rms_m;

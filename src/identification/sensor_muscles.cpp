@@ -48,6 +48,9 @@ std::vector<PairStats> pairStatistics(const Model& model, const Trajectory& data
 /// Where the sensors and muscles go.
 struct Layout {
   std::vector<PairStats> sensors, muscles;
+  /// Per muscle: its own stiffness is held at 0 (a muscle to an anchor, with
+  /// SensorMuscleOptions::anchor_stiffness kNone).
+  std::vector<char> no_own_stiffness;
 };
 
 /// The equation error's normal equations in the scaled columns (see the header).
@@ -269,6 +272,8 @@ class Fitter {
     constexpr int kMaxClampRounds = 6;
     const double mean_diagonal = reference_diagonal > 0.0 ? reference_diagonal : meanDiagonal(sys);
     std::vector<int> clamped;
+    for (int m = 0; m < m_; ++m)
+      if (layout_.no_own_stiffness[m]) clamped.push_back(m * k_ + 2 * s_ + 1);
     for (int round = 0;; ++round) {
       Eigen::MatrixXd a = sys.ata;
       a.diagonal().array() += ridge * mean_diagonal;
@@ -643,6 +648,8 @@ Layout chooseLayout(const Model& passive, const Trajectory& data, const std::vec
     if (!p || !(p->mean_m > 0.0)) return;
     taken.insert({a, b});
     layout.muscles.push_back(*p);
+    layout.no_own_stiffness.push_back((anchor[a] || anchor[b]) &&
+                                      o.anchor_stiffness == AnchorStiffness::kNone);
   };
   for (const Bond& bond : passive.bonds)
     if (bondKindInfo(passive.bond_types[bond.type].kind).has_elongation)
@@ -725,6 +732,37 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
 
 }  // namespace
 
+double bodyTravel(const Model& model, const Trajectory& data) {
+  const int n = std::min(static_cast<int>(model.particles.size()), data.numMarkers());
+  const double inf = std::numeric_limits<double>::infinity();
+  auto median = [](std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  std::vector<Eigen::Vector3d> lo(n, Eigen::Vector3d::Constant(inf)), hi(n, Eigen::Vector3d::Constant(-inf));
+  std::vector<double> sizes;
+  for (int t = 0; t < data.numFrames(); ++t) {
+    Eigen::Vector3d frame_lo = Eigen::Vector3d::Constant(inf), frame_hi = Eigen::Vector3d::Constant(-inf);
+    int seen = 0;
+    for (int i = 0; i < n; ++i) {
+      if (model.particles[i].fixed || data.isOccluded(t, i)) continue;
+      const Eigen::Vector3d x = data.position(t, i);
+      lo[i] = lo[i].cwiseMin(x);
+      hi[i] = hi[i].cwiseMax(x);
+      frame_lo = frame_lo.cwiseMin(x);
+      frame_hi = frame_hi.cwiseMax(x);
+      ++seen;
+    }
+    if (seen >= 2) sizes.push_back((frame_hi - frame_lo).norm());
+  }
+  std::vector<double> ranges;
+  for (int i = 0; i < n; ++i)
+    if (hi[i].x() >= lo[i].x()) ranges.push_back((hi[i] - lo[i]).norm());
+  const double size = median(sizes);
+  return size > 0.0 ? median(ranges) / size : 0.0;
+}
+
 SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data,
                                     const SensorMuscleOptions& o) {
   if (o.sensors < 1 || o.sensors > kMaxMuscleInputs)
@@ -778,14 +816,39 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   for (const ParamRef& ref : freeParameters(passive))
     if (!paramOf(passive, ref).has_value)
       throw InputError("sensor muscles: the passive model's '" + ref.name + "' has no value (identify it first)");
+  if (!(o.travel_body_sizes > 0.0) || !std::isfinite(o.travel_body_sizes))
+    throw InputError("sensor muscles: travel_body_sizes must be a finite number > 0");
   if (!o.anchors) return fitSensorMuscles(passive, data, std::vector<char>(n, 0), o);
+  // The anchor muscles' own stiffness (see the header): kAuto decided here, once for both layouts.
+  const double travel = bodyTravel(passive, data);
+  SensorMuscleOptions resolved = o;
+  if (o.anchor_stiffness == AnchorStiffness::kAuto) {
+    const bool tied = std::any_of(passive.particles.begin(), passive.particles.end(),
+                                  [](const Particle& p) { return p.fixed; });
+    resolved.anchor_stiffness = !tied && travel >= o.travel_body_sizes ? AnchorStiffness::kNone
+                                                                        : AnchorStiffness::kFitted;
+    if (o.progress) {
+      char line[240];
+      std::snprintf(line, sizeof(line), "sensor muscles: the body travels %.2f body sizes over the data%s: "
+                    "anchor muscles %s", travel, tied ? " (and the model ties it to the world)" : "",
+                    resolved.anchor_stiffness == AnchorStiffness::kNone
+                    ? "without a stiffness of their own" : "with a stiffness of their own");
+      o.progress(line);
+    }
+  }
+  const bool anchor_stiffness = resolved.anchor_stiffness == AnchorStiffness::kFitted;
+  const auto tagged = [&](SensorMuscleResult r) {
+    r.anchor_stiffness = r.anchors && anchor_stiffness;
+    r.body_travel = travel;
+    return r;
+  };
   Model anchored = passive;
   Trajectory anchored_data = data;
   const std::vector<char> anchor = addAnchors(&anchored, &anchored_data, o.anchor_distance_extents);
   if (!o.anchors_by_validation) {
-    SensorMuscleResult with = fitSensorMuscles(anchored, anchored_data, anchor, o);
+    SensorMuscleResult with = fitSensorMuscles(anchored, anchored_data, anchor, resolved);
     with.anchors = true;
-    return with;
+    return tagged(with);
   }
   // Both layouts, judged on the same validation frames: the anchors' extra unknowns fit noise
   // on a small body whose controller lives between its particles, and push along the world
@@ -797,20 +860,20 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   std::optional<SensorMuscleResult> with, without;
   try {
     say("sensor muscles: with anchors");
-    with = fitSensorMuscles(anchored, anchored_data, anchor, o);
+    with = fitSensorMuscles(anchored, anchored_data, anchor, resolved);
     with->anchors = true;
   } catch (const InputError& e) {
     say(std::string("sensor muscles: with anchors: ") + e.what());
   }
   say("sensor muscles: without anchors");
   try {
-    without = fitSensorMuscles(passive, data, std::vector<char>(n, 0), o);
+    without = fitSensorMuscles(passive, data, std::vector<char>(n, 0), resolved);
   } catch (const InputError& e) {
     if (!with) throw;
     say(std::string("sensor muscles: without anchors: ") + e.what());
   }
-  if (!with) return *without;
-  if (!without) return *with;
+  if (!with) return tagged(*without);
+  if (!without) return tagged(*with);
   const bool plain_better =
       (without->better_than_passive && !with->better_than_passive) ||
       (without->better_than_passive == with->better_than_passive &&
@@ -821,7 +884,7 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
                 plain_better ? "with them" : "without them",
                 1e3 * (plain_better ? with : without)->validation_rms_m);
   say(line);
-  return plain_better ? *without : *with;
+  return tagged(plain_better ? *without : *with);
 }
 
 namespace {

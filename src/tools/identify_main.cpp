@@ -31,7 +31,7 @@ const char* kUsage =
     "                [--refine-period G] [--select-structure]\n"
     "                [--add-muscles INPUTS] [--muscle-hidden H]\n"
     "                [--sensor-muscles SENSORS] [--muscle-neighbours K] [--rollout-rounds R]\n"
-    "                [--muscle-anchors auto|0|1]\n";
+    "                [--muscle-anchors auto|0|1] [--anchor-stiffness auto|0|1]\n";
 
 std::string formatMetres(double m) {
   char text[32];
@@ -45,7 +45,7 @@ int run(int argc, char** argv) {
                      "window-frames", "first-frame", "frames", "seed", "threads", "target-cost",
                      "max-time-s", "refine", "refine-start", "refine-period", "preset", "patience", "cost", "segment-frames",
                      "add-muscles", "muscle-hidden", "sensor-muscles", "muscle-neighbours",
-                     "rollout-rounds", "muscle-anchors"},
+                     "rollout-rounds", "muscle-anchors", "anchor-stiffness"},
                     {"compare-to-model", "quiet", "help", "select-structure"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -104,7 +104,8 @@ int run(int argc, char** argv) {
   // written only where they predict the held-out frames better);
   // off otherwise unless asked for. --sensor-muscles 0: none.
   const bool muscle_options_given =
-      args.has("muscle-neighbours") || args.has("rollout-rounds") || args.has("muscle-anchors");
+      args.has("muscle-neighbours") || args.has("rollout-rounds") || args.has("muscle-anchors") ||
+      args.has("anchor-stiffness");
   const bool sensor_default =
       muscle_options_given || (args.has("select-structure") && preset == mme::Preset::kDefault && !compare);
   mme::SensorMuscleOptions sensor_options;
@@ -126,12 +127,20 @@ int run(int argc, char** argv) {
       throw mme::InputError("--muscle-anchors must be auto, 0 or 1, got '" + anchors + "'");
     sensor_options.anchors = anchors != "0";
     sensor_options.anchors_by_validation = anchors == "auto";
+    // The anchor muscles' own stiffness: auto (the default) holds it at 0 for a free body that
+    // travels over the data, fits it otherwise; 1: fitted; 0: held at 0.
+    const std::string stiffness = args.get("anchor-stiffness", "auto");
+    if (stiffness != "auto" && stiffness != "0" && stiffness != "1")
+      throw mme::InputError("--anchor-stiffness must be auto, 0 or 1, got '" + stiffness + "'");
+    sensor_options.anchor_stiffness = stiffness == "auto" ? mme::AnchorStiffness::kAuto
+                                      : stiffness == "1"  ? mme::AnchorStiffness::kFitted
+                                                          : mme::AnchorStiffness::kNone;
     sensor_options.progress = [quiet](const std::string& line) {
       if (!quiet) std::printf("identify: %s\n", line.c_str());
       std::fflush(stdout);
     };
   } else if (muscle_options_given) {
-    throw mme::InputError("--muscle-neighbours, --rollout-rounds and --muscle-anchors need sensor "
+    throw mme::InputError("--muscle-neighbours, --rollout-rounds, --muscle-anchors and --anchor-stiffness need sensor "
                           "muscles (--sensor-muscles 0 turns them off)");
   }
 
@@ -274,15 +283,18 @@ int run(int argc, char** argv) {
   }
   if (fitted) {
     const mme::SensorMuscleResult& sm = *fitted;
-    char line[300];
+    char line[512];
     std::snprintf(line, sizeof(line),
                   "sensor muscles: %d sensors, %d muscles, ridge %.0e, %d rollout round(s), "
                   "activation time constant %.3g s, %s anchors; %d frames ahead on the last frames "
-                  "%.3g m (passive %.3g m, constant velocity %.3g m)%s",
+                  "%.3g m (passive %.3g m, constant velocity %.3g m)%s%s",
                   sm.sensors, sm.muscles, sm.ridge, sm.candidates[sm.chosen].rollout_rounds,
                   sm.activation_time_s, sm.anchors ? "with" : "without", sensor_options.horizon_frames,
                   sm.validation_rms_m,
                   sm.passive_rms_m, sm.constant_velocity_rms_m,
+                  !sm.anchors ? ""
+                  : sm.anchor_stiffness ? "; the anchor muscles with a stiffness of their own"
+                                        : "; the anchor muscles without a stiffness of their own",
                   sm.better_than_passive ? "" : ": not better than the passive model, which is kept");
     std::printf("identify: %s\n", line);
     if (!sm.better_than_passive)

@@ -75,6 +75,7 @@ grep -q "inputs: \[" "$tmp/muscled.yaml"
 for bad in "--add-muscles 17|--add-muscles must be" "--muscle-hidden -1|--muscle-hidden must be" \
            "--sensor-muscles 17|--sensor-muscles must be" "--muscle-neighbours 65|--muscle-neighbours must be" \
            "--rollout-rounds 21|--rollout-rounds must be" "--muscle-anchors 2|--muscle-anchors must be" \
+           "--anchor-stiffness yes|--anchor-stiffness must be" \
            "--sensor-muscles 0 --muscle-neighbours 2|need sensor muscles (--sensor-muscles 0 turns them off)"; do
   set +e
   "$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/x.yaml" \
@@ -101,6 +102,14 @@ awk '/^identify: sensor muscles: 6 sensors, 15 muscles, ridge/ {
   for (i = 1; i <= NF; ++i) { if ($i == "frames" && $(i+1) ~ /^[0-9]/) m = $(i+1); if ($i == "(passive") p = $(i+1) }
   printf "muscle: sensor muscles %s m against passive %s m, 10 frames ahead on held-out frames\n", m, p
   exit !(m + 0 > 0 && m + 0 < p + 0) }' "$tmp/sensor.log"
+# The object hangs from a fixed particle: the anchor muscles' own stiffness is fitted (auto);
+# --anchor-stiffness 0 holds it at 0 (the report says which).
+grep -q "^identify: sensor muscles: 6 sensors, .*; the anchor muscles with a stiffness of their own" "$tmp/sensor.log" ||
+  { echo "auto did not fit the anchor muscles' stiffness:"; grep sensor "$tmp/sensor.log"; exit 1; }
+"$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/sensor_k0.yaml" \
+  --cost short_term --sensor-muscles 6 --muscle-neighbours 3 --muscle-anchors 1 --anchor-stiffness 0 >"$tmp/sensor_k0.log" 2>&1
+grep -q "^identify: sensor muscles: 6 sensors, .*; the anchor muscles without a stiffness of their own" "$tmp/sensor_k0.log" ||
+  { echo "--anchor-stiffness 0:"; grep sensor "$tmp/sensor_k0.log"; exit 1; }
 [ "$(grep -c "kind: muscle" "$tmp/sensor.yaml")" -eq 15 ]
 [ "$(grep -c "name: sensor_" "$tmp/sensor.yaml")" -ge 6 ]
 [ "$(grep -c "name: anchor_[xyz]" "$tmp/sensor.yaml")" -eq 3 ]

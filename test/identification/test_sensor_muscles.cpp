@@ -241,10 +241,11 @@ TEST(SensorMuscles, RolloutsStartWhereAMarkerIsHidden) {
 struct PushCase {
   Model passive = mme::removeMuscles(linearMuscleObject());
   mme::Trajectory data;
-  PushCase() {
+  /// `stiffness`: the push's own [N/m] (a pull back to the fixed point besides the push).
+  explicit PushCase(double stiffness = 0.0) {
     Model truth = linearMuscleObject();
     const int world = mme::test::addParticle(&truth, Eigen::Vector3d(0.05, 0.1, -30.0), 1.0, true);
-    const int push = mme::test::addMuscleType(&truth, "push", 0.0, 29.75, 0.0, 400.0, 2, 0,
+    const int push = mme::test::addMuscleType(&truth, "push", stiffness, 29.75, 0.0, 400.0, 2, 0,
                                               {0.5, -0.4, 0.03, -0.02, 0.0});
     mme::test::addMuscle(&truth, push, 3, world, {0, 1});
     std::vector<std::string> names;
@@ -290,6 +291,94 @@ TEST(SensorMuscles, AnchorMusclesLearnAPushAlongAWorldAxis) {
               with_anchors);
   EXPECT_TRUE(bounded);
   EXPECT_LT(with_anchors, 0.5 * body_only);
+}
+
+/// The largest own stiffness of a muscle to an anchor [N/m], and how many there are.
+double anchorMuscleStiffness(const Model& m, int* count) {
+  double largest = 0.0;
+  *count = 0;
+  auto anchor = [&m](int i) { return m.particles[i].name.rfind("anchor_", 0) == 0; };
+  for (const mme::Bond& b : m.bonds)
+    if (m.bond_types[b.type].kind == mme::BondKind::kMuscle && (anchor(b.particles[0]) || anchor(b.particles[1]))) {
+      ++*count;
+      largest = std::max(largest, std::abs(m.bond_types[b.type].value(mme::kStiffness)));
+    }
+  return largest;
+}
+
+TEST(SensorMuscles, AnAnchorMusclesStiffnessHoldsABodyTiedToTheWorldNotOneThatTravels) {
+  // An anchor muscle's own stiffness pulls the body back to where it was recorded. The data here
+  // are made with such a pull (PushCase's push with a stiffness of its own, to a fixed point 30 m
+  // below) on a body the model ties to the world (its fixed particle): by default it is fitted.
+  // The same motion carried across several body sizes (every marker drifting at one speed, as a
+  // walk across a room) by a free body: by default it is held at 0.
+  const PushCase setup(400.0);
+  const mme::Trajectory fitted = mme::sliceFrames(setup.data, 0, kFitted);
+  const mme::SensorMuscleOptions o = smallOptions();
+  ASSERT_EQ(o.anchor_stiffness, mme::AnchorStiffness::kAuto);
+  int count = 0;
+  const mme::SensorMuscleResult in_place = mme::addSensorMuscles(setup.passive, fitted, o);
+  std::printf("tied: the body travels %.3g body sizes, the largest anchor muscle stiffness %g N/m\n",
+              in_place.body_travel, anchorMuscleStiffness(in_place.model, &count));
+  ASSERT_TRUE(setup.passive.particles[0].fixed);
+  EXPECT_TRUE(in_place.anchor_stiffness);
+  EXPECT_GT(anchorMuscleStiffness(in_place.model, &count), 1.0);
+  EXPECT_EQ(count, 9) << "3 free particles x 3 anchors";
+  mme::SensorMuscleOptions none = o;
+  none.anchor_stiffness = mme::AnchorStiffness::kNone;
+  const mme::SensorMuscleResult held = mme::addSensorMuscles(setup.passive, fitted, none);
+  EXPECT_FALSE(held.anchor_stiffness);
+  EXPECT_EQ(anchorMuscleStiffness(held.model, &count), 0.0);
+  EXPECT_EQ(count, 9);
+
+  Model free_body = setup.passive;
+  free_body.particles[0].fixed = false;
+  mme::Trajectory travelling = fitted;
+  double lo = 1e300, hi = -1e300;
+  for (int i = 0; i < 4; ++i) {
+    lo = std::min(lo, fitted.position(0, i).minCoeff());
+    hi = std::max(hi, fitted.position(0, i).maxCoeff());
+  }
+  const double speed = 3.0 * std::sqrt(3.0) * (hi - lo) / kFitted;  // [m/frame] along x
+  for (int t = 0; t < kFitted; ++t)
+    for (int i = 0; i < 4; ++i) travelling.position(t, i).x() += speed * t;
+  const mme::SensorMuscleResult walking = mme::addSensorMuscles(free_body, travelling, o);
+  std::printf("travelling: %.3g body sizes, the largest anchor muscle stiffness %g N/m\n",
+              walking.body_travel, anchorMuscleStiffness(walking.model, &count));
+  EXPECT_GE(walking.body_travel, o.travel_body_sizes);
+  EXPECT_FALSE(walking.anchor_stiffness);
+  EXPECT_EQ(anchorMuscleStiffness(walking.model, &count), 0.0);
+  EXPECT_EQ(count, 12) << "4 free particles x 3 anchors";
+  mme::SensorMuscleOptions fitted_anyway = o;
+  fitted_anyway.anchor_stiffness = mme::AnchorStiffness::kFitted;
+  EXPECT_GT(anchorMuscleStiffness(mme::addSensorMuscles(free_body, travelling, fitted_anyway).model, &count), 1.0);
+}
+
+TEST(SensorMuscles, BodyTravelTellsAWalkAcrossTheRoomFromOneInPlace) {
+  // The real recordings (bench_paper fig5's first 300 frames): the walks across the room travel,
+  // the arm on its fixed shoulder and the treadmill walk (subject01) do not.
+  struct Case {
+    const char* file;
+    bool travels;
+  };
+  for (const Case& c : {Case{"motion_capture_walk.trc", true}, Case{"Sample01_Eb015pi.c3d", true},
+                        Case{"Sample26_Walking_Hybrid_1_1.c3d", true}, Case{"subject01_walk1.trc", false},
+                        Case{"arm26_elbow_flex.trc", false}}) {
+    mme::Trajectory data = mme::readTrajectoryFile(std::string(MME_TEST_DATA_DIR) + "/real/" + c.file);
+    data = mme::sliceFrames(data, 0, std::min(data.numFrames(), 300));
+    const double travel = mme::bodyTravel(mme::markerModel(data), data);
+    std::printf("%s: %.3g body sizes\n", c.file, travel);
+    EXPECT_EQ(travel >= mme::SensorMuscleOptions().travel_body_sizes, c.travels) << c.file << ": " << travel;
+  }
+  // A fixed particle does not count; nothing seen: 0.
+  const Model object = mme::test::muscleObject();
+  mme::Trajectory data = mme::simulateTrajectory(object, 50, object.frame_rate_hz);
+  const double travel = mme::bodyTravel(object, data);
+  for (int t = 0; t < data.numFrames(); ++t) data.position(t, 0) += Eigen::Vector3d(100.0 * t, 0.0, 0.0);
+  ASSERT_TRUE(object.particles[0].fixed);
+  EXPECT_EQ(mme::bodyTravel(object, data), travel);
+  std::fill(data.occluded.begin(), data.occluded.end(), 1);
+  EXPECT_EQ(mme::bodyTravel(object, data), 0.0);
 }
 
 TEST(SensorMuscles, AnActivationStateCarriesTheArmsDriveOnArm26) {
@@ -512,6 +601,12 @@ TEST(SensorMuscles, BadInputGetsClearErrors) {
     o = smallOptions();
     o.activation_times_frames = {10.0, bad};
     EXPECT_NE(message(passive, data, o).find("activation time constants must be finite numbers >= 0"),
+              std::string::npos) << bad;
+  }
+  for (double bad : {0.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    o = smallOptions();
+    o.travel_body_sizes = bad;
+    EXPECT_NE(message(passive, data, o).find("travel_body_sizes must be a finite number > 0"),
               std::string::npos) << bad;
   }
   EXPECT_NE(message(passive, mme::sliceFrames(data, 0, 12), smallOptions()).find("too few"),

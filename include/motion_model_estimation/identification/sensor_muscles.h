@@ -22,7 +22,13 @@
 // along each axis (far away: the line from any marker to an anchor is that axis within a few
 // degrees), and every free particle gets a muscle to each: with its sensor-reading network it
 // is a push along a world axis driven by the posture. Anchors are never sensors (their distance
-// to a marker is the marker's absolute position along the axis: no posture). A model with them
+// to a marker is the marker's absolute position along the axis: no posture). An anchor muscle's
+// own stiffness pulls the body back to where it was recorded: right for a body held in place (an
+// arm on a fixed shoulder, a walk on a treadmill), wrong for one that travels (a walk across the
+// room: its model walks on beyond the data and comes apart a few metres later). So by default
+// (`anchor_stiffness` kAuto) it is fitted unless the body is free (the passive model has no fixed
+// particle) and travels over the data (bodyTravel: its markers' median range at least
+// `travel_body_sizes` x the body's median size), and held at 0 when both hold. A model with them
 // needs no anchor markers in the data (fixed particles stay where the model holds them).
 // Measured on bench_paper fig5's split, 10 frames ahead held out: see the README. On a small
 // body whose controller lives between its particles they fit the markers' noise instead
@@ -96,6 +102,9 @@
 
 namespace mme {
 
+/// The anchor muscles' own stiffness (SensorMuscleOptions::anchor_stiffness).
+enum class AnchorStiffness { kAuto, kFitted, kNone };
+
 struct SensorMuscleOptions {
   int sensors = 16;          ///< sensor bonds every muscle reads (1..kMaxMuscleInputs)
   /// Muscles from each particle to its nearest particles (0..64). 2 by default: with them the
@@ -114,6 +123,17 @@ struct SensorMuscleOptions {
   /// validation frames better (a kept fit first; see addSensorMuscles). Doubles the work at most
   /// (the layout without anchors has fewer muscles).
   bool anchors_by_validation = true;
+  /// With `anchors`: whether the anchor muscles have a stiffness of their own (see the header).
+  /// kAuto: held at 0 when the passive model has no fixed particle and the body travels
+  /// (bodyTravel >= travel_body_sizes), fitted otherwise.
+  /// Measured on bench_paper fig5's split (10 frames ahead held out): motion_capture_walk 6.93 ->
+  /// 5.22 mm without it, its written model bounded over 1000 frames instead of ~550; arm26 (a
+  /// fixed shoulder) 0.28 mm with it, 0.36 mm and an unbounded rollout without.
+  AnchorStiffness anchor_stiffness = AnchorStiffness::kAuto;
+  /// kAuto's threshold: the body travels when its markers' median range over the data is at
+  /// least this many body sizes (the real recordings' first 300 frames: the walks across the
+  /// room 1.18-1.68, the treadmill walk 0.14, the arm 0.004).
+  double travel_body_sizes = 0.5;
   /// The anchors' distance from the data's centre, in bounding-box diagonals of the data.
   double anchor_distance_extents = 20.0;
   /// Candidate windows [frames]: each equation sums the one-step equations of 2 window - 1
@@ -180,6 +200,9 @@ struct SensorMuscleResult {
   double ridge = 0.0;         ///< its relative ridge
   double activation_time_s = 0.0;        ///< its muscles' activation time constant (0: none)
   bool anchors = false;                  ///< the model has the anchors and their muscles
+  /// With anchors: their muscles' own stiffness was fitted (false: held at 0).
+  bool anchor_stiffness = false;
+  double body_travel = 0.0;              ///< bodyTravel of the data (body sizes)
   double validation_rms_m = 0.0;         ///< its validation RMS horizon ahead (with it)
   double passive_rms_m = 0.0;            ///< the passive model on the same validation frames
   double constant_velocity_rms_m = 0.0;  ///< the constant-velocity guess there
@@ -195,6 +218,11 @@ struct SensorMuscleResult {
   /// The final fit's residual per frame, a h^2 [m] (a window's row divided by window^2).
   double residual_rms_m = 0.0;
 };
+
+/// How far the body travels over the data, in body sizes: the median over the free particles of
+/// the diagonal of the box each one's seen positions span, over the median over frames of the
+/// diagonal of the box the free particles seen in that frame span (0 when nothing is seen).
+double bodyTravel(const Model& model, const Trajectory& data);
 
 /// Places and fits sensor muscles on `passive` (its values are the passive forces; every
 /// parameter it needs must have a value). `data` has the model's particles as markers, in the
