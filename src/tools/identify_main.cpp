@@ -31,7 +31,7 @@ const char* kUsage =
     "                [--refine-period G] [--select-structure]\n"
     "                [--add-muscles INPUTS] [--muscle-hidden H]\n"
     "                [--sensor-muscles SENSORS] [--muscle-neighbours K] [--rollout-rounds R]\n"
-    "                [--muscle-anchors auto|0|1] [--anchor-stiffness auto|0|1]\n";
+    "                [--muscle-anchors auto|0|1] [--anchor-stiffness 1|0|auto]\n";
 
 std::string formatMetres(double m) {
   char text[32];
@@ -127,9 +127,9 @@ int run(int argc, char** argv) {
       throw mme::InputError("--muscle-anchors must be auto, 0 or 1, got '" + anchors + "'");
     sensor_options.anchors = anchors != "0";
     sensor_options.anchors_by_validation = anchors == "auto";
-    // The anchor muscles' own stiffness: auto (the default) holds it at 0 for a free body that
-    // travels over the data, fits it otherwise; 1: fitted; 0: held at 0.
-    const std::string stiffness = args.get("anchor-stiffness", "auto");
+    // The anchor muscles' own stiffness: 1 (the default) fitted; 0 held at 0; auto held at 0 for
+    // a free body that travels over the data, fitted otherwise.
+    const std::string stiffness = args.get("anchor-stiffness", "1");
     if (stiffness != "auto" && stiffness != "0" && stiffness != "1")
       throw mme::InputError("--anchor-stiffness must be auto, 0 or 1, got '" + stiffness + "'");
     sensor_options.anchor_stiffness = stiffness == "auto" ? mme::AnchorStiffness::kAuto

@@ -102,14 +102,18 @@ awk '/^identify: sensor muscles: 6 sensors, 15 muscles, ridge/ {
   for (i = 1; i <= NF; ++i) { if ($i == "frames" && $(i+1) ~ /^[0-9]/) m = $(i+1); if ($i == "(passive") p = $(i+1) }
   printf "muscle: sensor muscles %s m against passive %s m, 10 frames ahead on held-out frames\n", m, p
   exit !(m + 0 > 0 && m + 0 < p + 0) }' "$tmp/sensor.log"
-# The object hangs from a fixed particle: the anchor muscles' own stiffness is fitted (auto);
-# --anchor-stiffness 0 holds it at 0 (the report says which).
+# The anchor muscles' own stiffness is fitted by default (and by auto: the object hangs from a
+# fixed particle); --anchor-stiffness 0 holds it at 0 (the report says which).
 grep -q "^identify: sensor muscles: 6 sensors, .*; the anchor muscles with a stiffness of their own" "$tmp/sensor.log" ||
   { echo "auto did not fit the anchor muscles' stiffness:"; grep sensor "$tmp/sensor.log"; exit 1; }
 "$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/sensor_k0.yaml" \
   --cost short_term --sensor-muscles 6 --muscle-neighbours 3 --muscle-anchors 1 --anchor-stiffness 0 >"$tmp/sensor_k0.log" 2>&1
 grep -q "^identify: sensor muscles: 6 sensors, .*; the anchor muscles without a stiffness of their own" "$tmp/sensor_k0.log" ||
   { echo "--anchor-stiffness 0:"; grep sensor "$tmp/sensor_k0.log"; exit 1; }
+"$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/sensor_ka.yaml" \
+  --cost short_term --sensor-muscles 6 --muscle-neighbours 3 --muscle-anchors 1 --anchor-stiffness auto >"$tmp/sensor_ka.log" 2>&1
+grep -q "^identify: sensor muscles: 6 sensors, .*; the anchor muscles with a stiffness of their own" "$tmp/sensor_ka.log" ||
+  { echo "--anchor-stiffness auto:"; grep sensor "$tmp/sensor_ka.log"; exit 1; }
 [ "$(grep -c "kind: muscle" "$tmp/sensor.yaml")" -eq 15 ]
 [ "$(grep -c "name: sensor_" "$tmp/sensor.yaml")" -ge 6 ]
 [ "$(grep -c "name: anchor_[xyz]" "$tmp/sensor.yaml")" -eq 3 ]

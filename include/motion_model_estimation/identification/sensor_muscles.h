@@ -24,11 +24,12 @@
 // is a push along a world axis driven by the posture. Anchors are never sensors (their distance
 // to a marker is the marker's absolute position along the axis: no posture). An anchor muscle's
 // own stiffness pulls the body back to where it was recorded: right for a body held in place (an
-// arm on a fixed shoulder, a walk on a treadmill), wrong for one that travels (a walk across the
-// room: its model walks on beyond the data and comes apart a few metres later). So by default
-// (`anchor_stiffness` kAuto) it is fitted unless the body is free (the passive model has no fixed
-// particle) and travels over the data (bodyTravel: its markers' median range at least
-// `travel_body_sizes` x the body's median size), and held at 0 when both hold. A model with them
+// arm on a fixed shoulder, a walk on a treadmill), and on a walk across the room it both helps
+// (where the walk starts and stops is a place) and harms (the model walks on beyond the data and,
+// tied back, comes apart a few metres later). `anchor_stiffness`: fitted by default; kAuto holds
+// it at 0 when the body is free (the passive model has no fixed particle) and travels over the
+// data (bodyTravel: its markers' median range at least `travel_body_sizes` x the body's median
+// size); kNone always. Measured: see the option. A model with them
 // needs no anchor markers in the data (fixed particles stay where the model holds them).
 // Measured on bench_paper fig5's split, 10 frames ahead held out: see the README. On a small
 // body whose controller lives between its particles they fit the markers' noise instead
@@ -125,11 +126,14 @@ struct SensorMuscleOptions {
   bool anchors_by_validation = true;
   /// With `anchors`: whether the anchor muscles have a stiffness of their own (see the header).
   /// kAuto: held at 0 when the passive model has no fixed particle and the body travels
-  /// (bodyTravel >= travel_body_sizes), fitted otherwise.
-  /// Measured on bench_paper fig5's split (10 frames ahead held out): motion_capture_walk 6.93 ->
-  /// 5.22 mm without it, its written model bounded over 1000 frames instead of ~550; arm26 (a
-  /// fixed shoulder) 0.28 mm with it, 0.36 mm and an unbounded rollout without.
-  AnchorStiffness anchor_stiffness = AnchorStiffness::kAuto;
+  /// (bodyTravel >= travel_body_sizes), fitted otherwise. Measured on bench_paper fig5's split
+  /// (10 frames ahead held out, fitted -> held at 0): the three walks across the room
+  /// motion_capture_walk 6.93 -> 5.22 mm, Sample01 15.05 -> 18.83, Sample26 9.97 -> 10.44; the
+  /// treadmill walk subject01 9.15 -> 10.42; arm26 0.28 -> 0.36 mm with an unbounded rollout. So
+  /// fitted by default; without it identify's model of motion_capture_walk stays bounded over a
+  /// 1000-frame rollout (with it, it leaves the data between 500 and 600 frames), which the live
+  /// node's `stable` asks for (10x its 100-frame window).
+  AnchorStiffness anchor_stiffness = AnchorStiffness::kFitted;
   /// kAuto's threshold: the body travels when its markers' median range over the data is at
   /// least this many body sizes (the real recordings' first 300 frames: the walks across the
   /// room 1.18-1.68, the treadmill walk 0.14, the arm 0.004).
