@@ -394,9 +394,12 @@ bool OnlineEstimator::update() {
         RolloutBound::of(best, prepareObservations(best, window_data), 0, window_data.numFrames());
     const auto first = long_run.positions_m.begin();
     const int n = long_run.numMarkers();
+    std::vector<Eigen::Vector3d> frame_x_m(static_cast<size_t>(n));  // one frame's, reused
     e.stable = true;
-    for (int t = 0; e.stable && t < long_run.numFrames(); ++t)
-      e.stable = bound.holds(best, std::vector<Eigen::Vector3d>(first + t * n, first + (t + 1) * n));
+    for (int t = 0; e.stable && t < long_run.numFrames(); ++t) {
+      std::copy(first + t * n, first + (t + 1) * n, frame_x_m.begin());
+      e.stable = bound.holds(best, frame_x_m);
+    }
   }
   // A reset() or replaceModel() during this update makes its result stale: drop it.
   std::lock_guard<std::mutex> model_lock(model_mutex_);

@@ -5,7 +5,8 @@
 # Checked here, not only by the script: every frame accepted, ~stats' occluded count equal to
 # the gaps counted in the piece by a parser of this test (plus every frame of the sensor
 # muscles' anchors, fixed particles without markers, when written), nothing rejected, the replay not faster
-# than the capture, the node alive to the end and no error in its log.
+# than the capture, the node alive to the end and no error in its log; --anchor-stiffness 0 reaches
+# identify (its report says the anchor muscles have no stiffness of their own), a bad value exits 2.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/../.." && pwd)
 source "$here/scripts/env.sh"
@@ -30,9 +31,20 @@ PY
 echo "the piece: 480 frames, $gaps occluded samples"
 [ "$gaps" -gt 500 ]  # a piece with many gaps, or the test proves little
 
+# A bad --anchor-stiffness is refused before any work (exit 2, the option named).
+set +e
+"$here/scripts/replay-real" --data "$tmp/data" --work "$tmp/work" --no-setup --anchor-stiffness yes \
+  >"$tmp/bad.log" 2>&1
+rc=$?
+set -e
+[ "$rc" -eq 2 ] && grep -q "anchor-stiffness must be 1, 0 or auto, got 'yes'" "$tmp/bad.log" ||
+  { echo "FAIL: --anchor-stiffness yes gave exit $rc"; cat "$tmp/bad.log"; exit 1; }
+[ ! -e "$tmp/work/summary.csv" ]
+
+# The anchor muscles' own stiffness held at 0 (passed through to identify; checked below).
 set +e
 "$here/scripts/replay-real" --data "$tmp/data" --work "$tmp/work" --identify-max-s 30 --no-setup \
-  >"$tmp/replay.log" 2>&1
+  --anchor-stiffness 0 >"$tmp/replay.log" 2>&1
 rc=$?
 set -e
 cat "$tmp/replay.log"
@@ -60,6 +72,9 @@ if [ "$muscles" -gt 0 ]; then
   want=0
   grep -q "^identify: sensor muscles: .*, with anchors;" "$tmp/work/sample26_piece.identify.log" && want=3
   [ "$anchors" -eq "$want" ] || { echo "FAIL: $anchors anchors in the written model, $want reported"; exit 1; }
+  # With anchors, identify held their own stiffness at 0 as replay-real was asked.
+  [ "$want" -eq 0 ] || grep -q "; the anchor muscles without a stiffness of their own" "$tmp/work/sample26_piece.identify.log" ||
+    { echo "FAIL: --anchor-stiffness 0 did not reach identify"; grep "sensor muscles" "$tmp/work/sample26_piece.identify.log"; exit 1; }
 else
   [ "$anchors" -eq 0 ]
 fi
