@@ -727,6 +727,11 @@ std::vector<char> addAnchors(Model* model, Trajectory* data, double extents) {
   return anchor;
 }
 
+/// A progress line to the caller, when it asked for them.
+void say(const SensorMuscleOptions& o, const std::string& line) {
+  if (o.progress) o.progress(line);
+}
+
 SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data,
                                     const std::vector<char>& anchor, const SensorMuscleOptions& o);
 
@@ -854,23 +859,20 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   // on a small body whose controller lives between its particles, and push along the world
   // where a walk's accelerations live. A layout too large to fit (max_unknowns) or without a
   // usable fit leaves the other.
-  const auto say = [&](const std::string& line) {
-    if (o.progress) o.progress(line);
-  };
   std::optional<SensorMuscleResult> with, without;
   try {
-    say("sensor muscles: with anchors");
+    say(o, "sensor muscles: with anchors");
     with = fitSensorMuscles(anchored, anchored_data, anchor, resolved);
     with->anchors = true;
   } catch (const InputError& e) {
-    say(std::string("sensor muscles: with anchors: ") + e.what());
+    say(o, std::string("sensor muscles: with anchors: ") + e.what());
   }
-  say("sensor muscles: without anchors");
+  say(o, "sensor muscles: without anchors");
   try {
     without = fitSensorMuscles(passive, data, std::vector<char>(n, 0), resolved);
   } catch (const InputError& e) {
     if (!with) throw;
-    say(std::string("sensor muscles: without anchors: ") + e.what());
+    say(o, std::string("sensor muscles: without anchors: ") + e.what());
   }
   if (!with) return tagged(*without);
   if (!without) return tagged(*with);
@@ -883,7 +885,7 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
                 plain_better ? "without" : "with", 1e3 * (plain_better ? without : with)->validation_rms_m,
                 plain_better ? "with them" : "without them",
                 1e3 * (plain_better ? with : without)->validation_rms_m);
-  say(line);
+  say(o, line);
   return tagged(plain_better ? *without : *with);
 }
 
@@ -897,9 +899,6 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
   if (validation_start < 4 || frames - validation_start < o.horizon_frames + 1)
     throw InputError("sensor muscles: " + std::to_string(frames) + " frames are too few to hold out " +
                      "a validation of " + std::to_string(o.horizon_frames) + " frames ahead");
-  auto say = [&](const std::string& line) {
-    if (o.progress) o.progress(line);
-  };
 
   Layout layout = chooseLayout(passive, data, anchor, o);
   if (layout.sensors.empty())
@@ -919,7 +918,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
                   "sensor muscles: %zu muscles reading %zu sensors are %zu unknowns, more than %zu: "
                   "%d sensors", layout.muscles.size(), layout.sensors.size(), unknownsOf(layout),
                   o.max_unknowns, fewer.sensors);
-    say(line);
+    say(o, line);
     layout = chooseLayout(passive, data, anchor, fewer);
   }
   const size_t unknowns = unknownsOf(layout);
@@ -937,7 +936,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
     char line[200];
     std::snprintf(line, sizeof(line), "sensor muscles: %d sensors, %d muscles, %zu unknowns",
                   result.sensors, result.muscles, result.unknowns);
-    say(line);
+    say(o, line);
   }
 
   // The window and the ridge: fitted on the frames before validation_start (every window's
@@ -984,7 +983,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
                     window, ridge, o.horizon_frames, frames - validation_start, 1e3 * c.validation_rms_m,
                     1e3 * result.passive_rms_m, 1e3 * result.constant_velocity_rms_m,
                     c.bounded ? "bounded" : "unbounded");
-      say(line);
+      say(o, line);
       result.candidates.push_back(c);
       // Bounded candidates first, then the lowest error.
       const SensorMuscleCandidate* b = best < 0 ? nullptr : &result.candidates[best];
@@ -1068,7 +1067,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
                               count.starts, count.filled, count.stopped,
                               o.horizon_frames, frames - validation_start, 1e3 * c.validation_rms_m,
                               c.bounded ? "bounded" : "unbounded");
-                say(line);
+                say(o, line);
                 result.candidates.push_back(c);
                 const SensorMuscleCandidate& b = result.candidates[best];
                 if (std::isfinite(c.validation_rms_m) && ((c.bounded && !b.bounded) ||
@@ -1111,7 +1110,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
                     "time constant %g frames: %d frames ahead on the last %d frames %.2f mm, rollout %s",
                     c.ridge, c.rollout_rounds, tau_frames, o.horizon_frames, frames - validation_start,
                     1e3 * rms, bounded ? "bounded" : "unbounded");
-      say(line);
+      say(o, line);
       if (bounded && std::isfinite(rms) && rms < chosen.validation_rms_m)
         chosen = {tau_frames * frame_period_s, rms};
     }
@@ -1139,7 +1138,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
     Eigen::VectorXd t;
     if (!fitter.solve(sys, c.ridge, &t)) continue;
     if (c.rollout_rounds > 0) {
-      say("sensor muscles: ridge " + formatRidge(c.ridge) + ", " + std::to_string(c.rollout_rounds) +
+      say(o, "sensor muscles: ridge " + formatRidge(c.ridge) + ", " + std::to_string(c.rollout_rounds) +
           " rollout round(s) on every frame");
       if (!runRounds(sys, c.ridge, t, frames, frames, c.rollout_rounds,
                      [&](int, const Eigen::VectorXd& r, const Fitter::RolloutCount&) { t = r; }))
@@ -1166,7 +1165,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
       final_bounded = true;
       break;
     }
-    say("sensor muscles: ridge " + formatRidge(c.ridge) + ", " + std::to_string(c.rollout_rounds) +
+    say(o, "sensor muscles: ridge " + formatRidge(c.ridge) + ", " + std::to_string(c.rollout_rounds) +
         " rollout round(s), refitted on every frame: a 10x rollout of it (from the validation "
         "start or from one of 8 frames over the data) leaves the data; the next candidate");
   }
