@@ -21,7 +21,7 @@ BondKindInfo makeInfo(BondKind kind) {
       return {kind, "muscle", 2, {kStiffness, kRestLength, kDamping, kGain, kActivationTime},
               true, false, true};
     case BondKind::kFloor:  // a conditional bond to the floor plane: ground contact
-      return {kind, "floor", 1, {kStiffness, kDamping, kFriction, kHeight}, false, false, false};
+      return {kind, "floor", 1, {kStiffness, kDamping, kFriction, kHeight, kContactDepth}, false, false, false};
   }
   return {kind, "?", 0, {}, false, false, false};  // not reached: every enumerator is listed
 }
@@ -57,6 +57,7 @@ const char* paramKey(ParamId id) {
     case kGain: return "gain";
     case kFriction: return "friction";
     case kHeight: return "height";
+    case kContactDepth: return "contact_depth";
     case kActivationTime: return "activation_time_constant";
     case kParamCount: break;
   }

@@ -161,13 +161,16 @@ inline void musclePair(const SpringLaw& law, double activation_n, const double* 
   fb[0] -= fx; fb[1] -= fy; fb[2] -= fz;
 }
 
-/// Ground contact (FloorLaw): normal penalty force while below the plane, viscous friction.
+/// Ground contact (FloorLaw): normal penalty force while below the plane, viscous friction;
+/// damping and friction ramped in over law.contact_depth.
 inline void floorForceRaw(const FloorLaw& law, const double* x, const double* v, double* f) {
   const double penetration_m = law.height - x[2];
   if (!(penetration_m > 0.0)) return;
-  f[0] -= law.friction * v[0];
-  f[1] -= law.friction * v[1];
-  f[2] += std::max(0.0, law.stiffness * penetration_m - law.damping * v[2]);
+  // r ramps damping and friction in over the contact depth: no jump at touch-down.
+  const double r = penetration_m < law.contact_depth ? penetration_m / law.contact_depth : 1.0;
+  f[0] -= r * law.friction * v[0];
+  f[1] -= r * law.friction * v[1];
+  f[2] += std::max(0.0, law.stiffness * penetration_m - r * law.damping * v[2]);
 }
 
 /// Elongation l - rest_length [m] and elongation speed (v_b - v_a).u [m/s] of a pair bond.

@@ -197,6 +197,9 @@ std::string validateModel(const Model& model) {
       const std::string reason = check(type.params[id], paramKey(id));
       if (!reason.empty()) return reason;
     }
+    const Param& depth = type.params[kContactDepth];
+    if (depth.present && depth.has_value && depth.value < 0.0)
+      return "bond type '" + type.name + "': contact_depth must be >= 0 [m] (0: none)";
     const Param& tau = type.params[kActivationTime];
     if (tau.present && tau.has_value && tau.value < 0.0)
       return "bond type '" + type.name + "': activation_time_constant must be >= 0 [s] (0: none)";

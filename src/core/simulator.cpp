@@ -44,7 +44,8 @@ SpringLaw springLawOf(const BondType& type) {
 }
 
 FloorLaw floorLawOf(const BondType& type) {
-  return {type.value(kStiffness), type.value(kDamping), type.value(kFriction), type.value(kHeight)};
+  return {type.value(kStiffness), type.value(kDamping), type.value(kFriction), type.value(kHeight),
+          type.value(kContactDepth)};
 }
 
 FlexionLaw flexionLawOf(const BondType& type) {
@@ -113,6 +114,7 @@ void LawTable::set(const ParamRef& ref, double value) {
     case kGain: muscle[t].gain_n = value; break;
     case kFriction: fc.friction = value; break;
     case kHeight: fc.height = value; break;
+    case kContactDepth: fc.contact_depth = value; break;
     case kActivationTime: muscle[t].activation_time_s = value; break;
     case kParamCount: break;  // not a parameter (network parameters are handled above)
   }

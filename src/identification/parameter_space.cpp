@@ -131,6 +131,8 @@ ParameterSpace::ParameterSpace(const Model& model, const Trajectory& trajectory)
       lo = 0.0; hi = M_PI;
     } else if (ref.param == kMaxElongation) {
       lo = 1e-3; hi = 10.0;
+    } else if (ref.param == kContactDepth) {
+      lo = 1e-6; hi = 0.1;  // a micrometre to 10 cm of penetration
     } else if (ref.param == kHeight) {
       const double guess = p.has_value ? p.value : 0.0;
       lo = guess - kFloorHeightRange_m;

@@ -28,6 +28,9 @@ enum ParamId : int {
   kGain,              ///< muscle output gain [N]: activation = gain * tanh(network output)
   kFriction,          ///< floor: viscous friction along the floor while in contact [N s/m]
   kHeight,            ///< floor: height of the floor plane z = height [m] (world z up)
+  /// floor: depth over which damping and friction grow from 0 to full [m]; 0 or absent: full
+  /// from the first contact (README "Ground contact")
+  kContactDepth,
   /// muscle: activation dynamics' time constant [s]; 0 or absent: the activation is the
   /// network's output at once (muscle.h)
   kActivationTime,

@@ -28,11 +28,14 @@ struct FloorLaw {
   double damping = 0;    ///< c [N s/m] on the normal speed
   double friction = 0;   ///< mu [N s/m]: viscous, along the floor
   double height = 0;     ///< [m]
+  /// d [m]: damping and friction grow as min(1, p / d) over the first d of penetration, so the
+  /// force is continuous at touch-down; 0: full from the first contact
+  double contact_depth = 0;
 };
 
-/// Adds the floor's force on a particle at x with velocity v: with penetration p = height - z > 0,
-/// F_z += max(0, k p - c v_z) (it pushes, never pulls), F_x += -mu v_x, F_y += -mu v_y; nothing
-/// when p <= 0.
+/// Adds the floor's force on a particle at x with velocity v: with penetration p = height - z > 0
+/// and r = min(1, p / d) (r = 1 when d = 0), F_z += max(0, k p - r c v_z) (it pushes, never
+/// pulls), F_x += -r mu v_x, F_y += -r mu v_y; nothing when p <= 0.
 void addFloorForce(const FloorLaw& law, const Eigen::Vector3d& x, const Eigen::Vector3d& v,
                    Eigen::Vector3d* f);
 
