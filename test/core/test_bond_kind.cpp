@@ -51,7 +51,8 @@ TEST(BondKind, FactsOfEachKind) {
   EXPECT_FALSE(bondKindInfo(BondKind::kViscosity).has_elongation);
   EXPECT_EQ(bondKindInfo(BondKind::kFloor).arity, 1);
   EXPECT_EQ(bondKindInfo(BondKind::kFloor).params,
-            (std::vector<mme::ParamId>{mme::kStiffness, mme::kDamping, mme::kFriction, mme::kHeight}));
+            (std::vector<mme::ParamId>{mme::kStiffness, mme::kDamping, mme::kFriction, mme::kHeight,
+                                       mme::kContactDepth}));
   EXPECT_FALSE(bondKindInfo(BondKind::kFloor).has_elongation);
   for (BondKind k : {BondKind::kSpring, BondKind::kFlexion, BondKind::kViscosity, BondKind::kFloor})
     EXPECT_FALSE(bondKindInfo(k).network) << bondKindInfo(k).name;
