@@ -14,6 +14,7 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -597,10 +598,15 @@ struct WalkerCase {
   std::vector<mme::ParamRef> refs = mme::freeParameters(scene.model);
   std::vector<double> truth = mme::getValues(scene.model, refs);
 
-  /// The true values off by +-`off` (relative, alternate signs: - on even indices).
-  std::vector<double> off(double off) const {
+  /// The true values off by +-`off` (relative). signs_seed 0: alternate signs (- on even
+  /// indices); otherwise each sign drawn from std::mt19937(signs_seed).
+  std::vector<double> off(double off, unsigned signs_seed = 0) const {
     std::vector<double> v = truth;
-    for (size_t k = 0; k < v.size(); ++k) v[k] *= k % 2 ? 1.0 + off : 1.0 - off;
+    std::mt19937 rng(signs_seed);
+    for (size_t k = 0; k < v.size(); ++k) {
+      const bool up = signs_seed == 0 ? k % 2 == 1 : (rng() & 1u) == 1u;
+      v[k] *= up ? 1.0 + off : 1.0 - off;
+    }
     return v;
   }
 };
@@ -642,14 +648,15 @@ WalkerScore scoreWalker(const Model& truth_model, const mme::Trajectory& data,
 /// The output error alone on the walker (issue 16's identification targets): 50 noiseless frames,
 /// 10-frame segments, its 40 muscle-free parameters started at the truth and 1 % off (alternate
 /// signs), the default options (start states fitted by the model, soft then hard continuity) at
-/// most 100 iterations per stage, and for comparison 1 % off with hard continuity only. Every
+/// most 100 iterations per stage, for comparison 1 % off with hard continuity only, and 1 % off
+/// with signs drawn at random (seeds 1 and 2: how much the answer depends on the start). Every
 /// parameter's error beside its Cramer-Rao bound at 0.1 mm marker noise (what the 50 frames can
 /// tell about it) goes to walker_oe_params.csv. Opt-in (`--only walker_oe`, ~10 minutes): the
 /// README's "Identifying the walker" figures.
 void walkerOutputError(const Settings& s) {
   std::FILE* f = openCsv(s.out_dir + "/walker_oe.csv",
-                         "start_off,continuity,segment_frames,iterations,termination,wall_s,start_cost_m2,"
-                         "cost_m2,within_1pct,median_error,worst_error,open_loop_1s_rms_m");
+                         "start_off,signs,continuity,segment_frames,iterations,termination,wall_s,"
+                         "start_cost_m2,cost_m2,within_1pct,median_error,worst_error,open_loop_1s_rms_m");
   const WalkerCase walker;
   const mme::Scene& scene = walker.scene;
   const mme::Trajectory& data = walker.data;
@@ -659,10 +666,13 @@ void walkerOutputError(const Settings& s) {
   struct Run {
     double off;
     bool soft_first;
+    unsigned signs_seed;  // 0: alternate signs
   };
   std::vector<std::vector<double>> answers;
-  for (const Run run : {Run{0.0, true}, Run{0.01, true}, Run{0.01, false}}) {
-    const std::vector<double> start = walker.off(run.off);
+  for (const Run run : {Run{0.0, true, 0}, Run{0.01, true, 0}, Run{0.01, false, 0},
+                        Run{0.01, true, 1}, Run{0.01, true, 2}}) {
+    if (s.quick && run.signs_seed != 0) continue;
+    const std::vector<double> start = walker.off(run.off, run.signs_seed);
     mme::OutputErrorOptions o;
     o.segment_frames = 10;
     o.max_iterations = s.quick ? 3 : 100;
@@ -675,15 +685,17 @@ void walkerOutputError(const Settings& s) {
     answers.push_back(r.values);
     const WalkerScore score = scoreWalker(scene.model, data, r.values);
     const char* continuity = run.soft_first ? "soft_then_hard" : "hard";
-    std::fprintf(f, "%g,%s,%d,%d,%s,%.2f,%.6g,%.6g,%d,%.6g,%.6g,%.6g\n", run.off, continuity,
-                 o.segment_frames, r.iterations, r.converged ? "converged" : "limit", r.wall_time_s,
-                 r.start_cost_m2, r.observation_cost_m2, score.within_1pct, score.median_error,
+    const std::string signs =
+        run.signs_seed == 0 ? "alternate" : "random_seed_" + std::to_string(run.signs_seed);
+    std::fprintf(f, "%g,%s,%s,%d,%d,%s,%.2f,%.6g,%.6g,%d,%.6g,%.6g,%.6g\n", run.off, signs.c_str(),
+                 continuity, o.segment_frames, r.iterations, r.converged ? "converged" : "limit",
+                 r.wall_time_s, r.start_cost_m2, r.observation_cost_m2, score.within_1pct, score.median_error,
                  score.worst_error, score.open_loop_rms_m);
     std::fflush(f);
-    std::printf("walker_oe: from %g %% off, %s continuity, %d-frame segments: %d iterations (%s), "
-                "%.1f s; cost %.4g -> %.4g m^2; %d of %zu parameters within 1 %%, median %.3g %%, "
-                "worst %.3g %% (%s); open loop after 1 s %.3g m RMS\n", 100.0 * run.off, continuity,
-                o.segment_frames, r.iterations, r.termination.c_str(), r.wall_time_s, r.start_cost_m2,
+    std::printf("walker_oe: from %g %% off (%s signs), %s continuity, %d-frame segments: %d "
+                "iterations (%s), %.1f s; cost %.4g -> %.4g m^2; %d of %zu parameters within 1 %%, "
+                "median %.3g %%, worst %.3g %% (%s); open loop after 1 s %.3g m RMS\n",
+                100.0 * run.off, signs.c_str(), continuity, o.segment_frames, r.iterations, r.termination.c_str(), r.wall_time_s, r.start_cost_m2,
                 r.observation_cost_m2, score.within_1pct, truth.size(), 100.0 * score.median_error,
                 100.0 * score.worst_error, score.worst_name.c_str(), score.open_loop_rms_m);
     std::fflush(stdout);
@@ -696,7 +708,7 @@ void walkerOutputError(const Settings& s) {
                          "error_hard_only_percent,cramer_rao_0.1mm_percent");
   for (size_t k = 0; k < truth.size(); ++k) {
     std::fprintf(g, "%s,%.9g", refs[k].name.c_str(), truth[k]);
-    for (const std::vector<double>& a : answers) std::fprintf(g, ",%.6g", 100.0 * (a[k] / truth[k] - 1.0));
+    for (size_t a = 0; a < 3; ++a) std::fprintf(g, ",%.6g", 100.0 * (answers[a][k] / truth[k] - 1.0));
     std::fprintf(g, ",%.6g\n", 100.0 * bound[k] / std::fabs(truth[k]));
   }
   std::fclose(g);

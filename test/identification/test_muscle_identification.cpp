@@ -161,13 +161,12 @@ TEST(MuscleIdentification, FreeMusclesOnDataWithoutAControllerChangeTheCostByLes
                                     << with.global_cost << " m^2";
 }
 
-// Why the walker is not identified to issue 16's 1 % (README "Identifying the walker"): its
-// contact and servos move the markers between frames (80 substeps), so on its own noiseless
-// frames the paper's one-step cost at the true values is far from round-off (measured 0.049 m^2
-// over 50 frames) and the fourth-difference noise estimate reads 0.8 mm: `identify --cost auto`
-// treats the data as noisy and goes to the output error, which on this scene stops short of the
-// truth even when started there (`bench_paper --only walker_oe`). These facts are what a better
-// output error has to start from.
+// Why the paper's one-step cost cannot identify the walker to issue 16's 1 % (README
+// "Identifying the walker"): its contact and servos move the markers between frames (80
+// substeps), so on its own noiseless frames the one-step cost at the true values is far from
+// round-off and the fourth-difference noise estimate reads 0.8 mm: `identify --cost auto`
+// treats the data as noisy and goes to the output error, which simulates between frames
+// (`bench_paper --only walker_oe,walker_identify`).
 TEST(MuscleIdentification, TheWalkersFramesAreNotExactForTheOneStepCost) {
   const mme::Scene scene = mme::makeScene("walker");
   const mme::Trajectory data = mme::simulateTrajectory(scene.model, 50, scene.model.frame_rate_hz);
