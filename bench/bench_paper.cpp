@@ -651,7 +651,7 @@ WalkerScore scoreWalker(const Model& truth_model, const mme::Trajectory& data,
 /// most 100 iterations per stage, for comparison 1 % off with hard continuity only, and 1 % off
 /// with signs drawn at random (seeds 1 and 2: how much the answer depends on the start). Every
 /// parameter's error beside its Cramer-Rao bound at 0.1 mm marker noise (what the 50 frames can
-/// tell about it) goes to walker_oe_params.csv. Opt-in (`--only walker_oe`, ~10 minutes): the
+/// tell about it) goes to walker_oe_params.csv. Opt-in (`--only walker_oe`, ~25 minutes): the
 /// README's "Identifying the walker" figures.
 void walkerOutputError(const Settings& s) {
   std::FILE* f = openCsv(s.out_dir + "/walker_oe.csv",
