@@ -689,14 +689,15 @@ void walkerOutputError(const Settings& s) {
         run.signs_seed == 0 ? "alternate" : "random_seed_" + std::to_string(run.signs_seed);
     std::fprintf(f, "%g,%s,%s,%d,%d,%s,%.2f,%.6g,%.6g,%d,%.6g,%.6g,%.6g\n", run.off, signs.c_str(),
                  continuity, o.segment_frames, r.iterations, r.converged ? "converged" : "limit",
-                 r.wall_time_s, r.start_cost_m2, r.observation_cost_m2, score.within_1pct, score.median_error,
-                 score.worst_error, score.open_loop_rms_m);
+                 r.wall_time_s, r.start_cost_m2, r.observation_cost_m2, score.within_1pct,
+                 score.median_error, score.worst_error, score.open_loop_rms_m);
     std::fflush(f);
     std::printf("walker_oe: from %g %% off (%s signs), %s continuity, %d-frame segments: %d "
                 "iterations (%s), %.1f s; cost %.4g -> %.4g m^2; %d of %zu parameters within 1 %%, "
                 "median %.3g %%, worst %.3g %% (%s); open loop after 1 s %.3g m RMS\n",
-                100.0 * run.off, signs.c_str(), continuity, o.segment_frames, r.iterations, r.termination.c_str(), r.wall_time_s, r.start_cost_m2,
-                r.observation_cost_m2, score.within_1pct, truth.size(), 100.0 * score.median_error,
+                100.0 * run.off, signs.c_str(), continuity, o.segment_frames, r.iterations,
+                r.termination.c_str(), r.wall_time_s, r.start_cost_m2, r.observation_cost_m2,
+                score.within_1pct, truth.size(), 100.0 * score.median_error,
                 100.0 * score.worst_error, score.worst_name.c_str(), score.open_loop_rms_m);
     std::fflush(stdout);
   }

@@ -21,7 +21,8 @@ BondKindInfo makeInfo(BondKind kind) {
       return {kind, "muscle", 2, {kStiffness, kRestLength, kDamping, kGain, kActivationTime},
               true, false, true};
     case BondKind::kFloor:  // a conditional bond to the floor plane: ground contact
-      return {kind, "floor", 1, {kStiffness, kDamping, kFriction, kHeight, kContactDepth}, false, false, false};
+      return {kind, "floor", 1, {kStiffness, kDamping, kFriction, kHeight, kContactDepth},
+              false, false, false};
   }
   return {kind, "?", 0, {}, false, false, false};  // not reached: every enumerator is listed
 }

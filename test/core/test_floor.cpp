@@ -1,7 +1,8 @@
-// The floor bond kind (ground contact): its force against a hand computation, a dropped particle
-// comes to rest on the floor at the penetration that carries its weight, friction stops a slide,
-// the model file reads and writes it, and the evolution strategy identifies a bouncing ball's
-// contact parameters.
+// The floor bond kind (ground contact): its force against a hand computation, with and without a
+// contact depth; a dropped particle comes to rest on the floor at the penetration that carries
+// its weight, friction stops a slide; with a contact depth the motion is continuous in the start
+// state (without one it jumps); the model file reads and writes it, and the evolution strategy
+// identifies a bouncing ball's contact parameters.
 #include <gtest/gtest.h>
 
 #include <algorithm>
