@@ -573,7 +573,7 @@ TEST(Walker, StaysUprightAndBounded) {
 
 // Identification needs the motion to depend smoothly on the parameters: at the walker's 80
 // substeps a 1e-8 relative change of every free parameter moves no marker more than 10 um over
-// the first second (measured 0.17 um; with 20 substeps the motion was chaotic at round-off).
+// the first second (measured 0.55 um; with 20 substeps the motion was chaotic at round-off).
 TEST(Walker, MotionDependsSmoothlyOnItsParameters) {
   const Scene scene = makeScene("walker");
   const Model& model = scene.model;
