@@ -127,8 +127,12 @@ struct Settings {
   std::string refine;        // "" = the preset's
   mme::Preset preset = mme::Preset::kPaper;  // the paper's experiments with its own settings
   uint64_t seed = 1;
+  std::string fig5_cases;    // "" = every case of fig5
   bool wants(const std::string& name) const {
     return only.empty() || ("," + only + ",").find("," + name + ",") != std::string::npos;
+  }
+  bool wantsFig5Case(const std::string& name) const {
+    return fig5_cases.empty() || ("," + fig5_cases + ",").find("," + name + ",") != std::string::npos;
   }
 };
 
@@ -559,6 +563,7 @@ void structureRealExperiment(const Settings& s) {
                            "Sample01_Eb015pi.c3d", "Sample02_pc_int.c3d",
                            "Sample26_Walking_Hybrid_1_1.c3d"}) {
     if (s.quick && std::string(file) != "arm26_elbow_flex.trc") continue;
+    if (!s.wantsFig5Case(file)) continue;
     const std::string path = std::string(MME_TEST_DATA_DIR) + "/real/" + file;
     mme::Trajectory data = mme::readTrajectoryFile(path);
     data = mme::sliceFrames(data, 0, std::min(data.numFrames(), 300));
@@ -779,7 +784,7 @@ void figure5(const Settings& s) {
     mme::Trajectory data;
   };
   std::vector<Case> cases;
-  {
+  if (s.wantsFig5Case("walker")) {
     // The walking walker (80 substeps: its cost is ~100x a 1-substep scene's per frame): its
     // first 2 s (100 frames, about one and a half strides), 80 fitted, 20 held out.
     const mme::Scene walker = mme::makeScene("walker");
@@ -791,6 +796,7 @@ void figure5(const Settings& s) {
   for (const char* file : {"motion_capture_walk.trc", "subject01_walk1.trc", "arm26_elbow_flex.trc",
                            "Sample01_Eb015pi.c3d", "Sample26_Walking_Hybrid_1_1.c3d"}) {
     if (s.quick && std::string(file) != "arm26_elbow_flex.trc") continue;
+    if (!s.wantsFig5Case(file)) continue;
     mme::Trajectory data = mme::readTrajectoryFile(std::string(MME_TEST_DATA_DIR) + "/real/" + file);
     data = mme::sliceFrames(data, 0, std::min(data.numFrames(), 300));
     const mme::StructureResult r = mme::selectStructure(mme::markerModel(data), data, so);
@@ -949,12 +955,14 @@ int main(int argc, char** argv) {
         }
       }
       else if (a == "--seed" && i + 1 < argc) s.seed = std::strtoull(argv[++i], nullptr, 10);
+      else if (a == "--fig5-cases" && i + 1 < argc) s.fig5_cases = argv[++i];
       else {
         std::fprintf(stderr, "usage: bench_paper [--quick] [--out-dir DIR] [--threads T] "
                              "[--only fig1,table1,table2,scaling,random18,defaults,accuracy,\n"
                              "        online,structure,structure_real,fig5,walker_oe,walker_identify]\n"
                              "       [--generations N] [--refine-start G] [--refine-period G]\n"
                              "       [--refine-evaluations E] [--refine ALGORITHM] [--seed S]\n"
+                             "       [--fig5-cases walker,Sample01_Eb015pi.c3d,...] (default: all)\n"
                              "       [--preset paper|default] (default: paper)\n"
                              "       bench_paper compare TRUTH.yaml ESTIMATE.yaml\n");
         return 2;
