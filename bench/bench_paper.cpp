@@ -132,7 +132,8 @@ struct Settings {
     return only.empty() || ("," + only + ",").find("," + name + ",") != std::string::npos;
   }
   bool wantsFig5Case(const std::string& name) const {
-    return fig5_cases.empty() || ("," + fig5_cases + ",").find("," + name + ",") != std::string::npos;
+    return fig5_cases.empty() ||
+           ("," + fig5_cases + ",").find("," + name + ",") != std::string::npos;
   }
 };
 
@@ -563,7 +564,6 @@ void structureRealExperiment(const Settings& s) {
                            "Sample01_Eb015pi.c3d", "Sample02_pc_int.c3d",
                            "Sample26_Walking_Hybrid_1_1.c3d"}) {
     if (s.quick && std::string(file) != "arm26_elbow_flex.trc") continue;
-    if (!s.wantsFig5Case(file)) continue;
     const std::string path = std::string(MME_TEST_DATA_DIR) + "/real/" + file;
     mme::Trajectory data = mme::readTrajectoryFile(path);
     data = mme::sliceFrames(data, 0, std::min(data.numFrames(), 300));
