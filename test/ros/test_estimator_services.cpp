@@ -21,6 +21,7 @@
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/io/model_yaml.h"
 #include "test_estimator_common.h"
+#include "master_check.h"
 
 namespace {
 
@@ -247,6 +248,7 @@ TEST(EstimatorServices, LoadModelRefusesBadPathsAndKeepsTheModel) {
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "test_estimator_services");
+  if (!mmetest::masterAnswers("test_estimator_services")) return 2;
   ros::NodeHandle nh, pnh("~");
   ros::AsyncSpinner spinner(1);
   spinner.start();

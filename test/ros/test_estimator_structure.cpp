@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "test_estimator_common.h"
+#include "master_check.h"
 
 namespace {
 
@@ -109,5 +110,6 @@ TEST(EstimatorStructure, ChoosesTheStructureIdentifiesItAndChoosesAgainOnReset) 
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "test_estimator_structure");
+  if (!mmetest::masterAnswers("test_estimator_structure")) return 2;
   return RUN_ALL_TESTS();
 }

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "test_estimator_common.h"
+#include "master_check.h"
 
 namespace {
 
@@ -90,6 +91,7 @@ TEST(EstimatorNode, TracksAParameterStep) {
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "test_estimator_tracking");
+  if (!mmetest::masterAnswers("test_estimator_tracking")) return 2;
   ros::NodeHandle nh;
   ros::AsyncSpinner spinner(1);
   spinner.start();

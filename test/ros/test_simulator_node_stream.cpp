@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "motion_model_estimation/MarkerFrame.h"
+#include "master_check.h"
 
 namespace {
 
@@ -65,5 +66,6 @@ TEST(SimulatorNode, StreamsTheSceneAsMovingMarkerFrames) {
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "test_simulator_node_stream");
+  if (!mmetest::masterAnswers("test_simulator_node_stream")) return 2;
   return RUN_ALL_TESTS();
 }
