@@ -654,13 +654,16 @@ WalkerScore scoreWalker(const Model& truth_model, const mme::Trajectory& data,
 /// 10-frame segments, its 40 muscle-free parameters started at the truth and 1 % off (alternate
 /// signs), the default options (start states fitted by the model, soft then hard continuity) at
 /// most 100 iterations per stage, for comparison 1 % off with hard continuity only, and 1 % off
-/// with signs drawn at random (seeds 1 and 2: how much the answer depends on the start). Every
+/// with signs drawn at random (seeds 1 and 2: how much the answer depends on the start), and
+/// the three 1 % starts again growing the data (OutputErrorOptions::grow_segments 1: the first
+/// segment's frames, then 2, 4, then all). Every
 /// parameter's error beside its Cramer-Rao bound at 0.1 mm marker noise (what the 50 frames can
-/// tell about it) goes to walker_oe_params.csv. Opt-in (`--only walker_oe`, ~25 minutes): the
+/// tell about it) goes to walker_oe_params.csv. Opt-in (`--only walker_oe`, ~40 minutes): the
 /// README's "Identifying the walker" figures.
 void walkerOutputError(const Settings& s) {
   std::FILE* f = openCsv(s.out_dir + "/walker_oe.csv",
-                         "start_off,signs,continuity,segment_frames,iterations,termination,wall_s,"
+                         "start_off,signs,continuity,segment_frames,grow_segments,iterations,"
+                         "termination,wall_s,"
                          "start_cost_m2,cost_m2,within_1pct,median_error,worst_error,open_loop_1s_rms_m");
   const WalkerCase walker;
   const mme::Scene& scene = walker.scene;
@@ -672,10 +675,13 @@ void walkerOutputError(const Settings& s) {
     double off;
     bool soft_first;
     unsigned signs_seed;  // 0: alternate signs
+    int grow_segments;    // OutputErrorOptions::grow_segments (0: every frame at once)
   };
   std::vector<std::vector<double>> answers;
-  for (const Run run : {Run{0.0, true, 0}, Run{0.01, true, 0}, Run{0.01, false, 0},
-                        Run{0.01, true, 1}, Run{0.01, true, 2}}) {
+  size_t growing = 0;  // the answer from 1 % off (alternate signs) growing the data
+  for (const Run run : {Run{0.0, true, 0, 0}, Run{0.01, true, 0, 0}, Run{0.01, false, 0, 0},
+                        Run{0.01, true, 1, 0}, Run{0.01, true, 2, 0}, Run{0.01, true, 0, 1},
+                        Run{0.01, true, 1, 1}, Run{0.01, true, 2, 1}}) {
     if (s.quick && run.signs_seed != 0) continue;
     const std::vector<double> start = walker.off(run.off, run.signs_seed);
     mme::OutputErrorOptions o;
@@ -685,22 +691,27 @@ void walkerOutputError(const Settings& s) {
     o.estimate_std = false;
     o.noise_std_m = 1e-4;  // a weight only: the data are noiseless
     if (!run.soft_first) o.first_continuity_weight = 0.0;
+    o.grow_segments = run.grow_segments;
     const mme::OutputErrorResult r =
         mme::estimateOutputError(scene.model, data, space, space.toSearch(start), o);
     answers.push_back(r.values);
+    if (run.off > 0.0 && run.soft_first && run.signs_seed == 0 && run.grow_segments > 0)
+      growing = answers.size() - 1;
     const WalkerScore score = scoreWalker(scene.model, data, r.values);
     const char* continuity = run.soft_first ? "soft_then_hard" : "hard";
     const std::string signs =
         run.signs_seed == 0 ? "alternate" : "random_seed_" + std::to_string(run.signs_seed);
-    std::fprintf(f, "%g,%s,%s,%d,%d,%s,%.2f,%.6g,%.6g,%d,%.6g,%.6g,%.6g\n", run.off, signs.c_str(),
-                 continuity, o.segment_frames, r.iterations, r.converged ? "converged" : "limit",
+    std::fprintf(f, "%g,%s,%s,%d,%d,%d,%s,%.2f,%.6g,%.6g,%d,%.6g,%.6g,%.6g\n", run.off,
+                 signs.c_str(), continuity, o.segment_frames, run.grow_segments, r.iterations, r.converged ? "converged" : "limit",
                  r.wall_time_s, r.start_cost_m2, r.observation_cost_m2, score.within_1pct,
                  score.median_error, score.worst_error, score.open_loop_rms_m);
     std::fflush(f);
-    std::printf("walker_oe: from %g %% off (%s signs), %s continuity, %d-frame segments: %d "
+    std::printf("walker_oe: from %g %% off (%s signs), %s continuity, %d-frame segments, "
+                "growing from %d segment(s) (0: all at once): %d "
                 "iterations (%s), %.1f s; cost %.4g -> %.4g m^2; %d of %zu parameters within 1 %%, "
                 "median %.3g %%, worst %.3g %% (%s); open loop after 1 s %.3g m RMS\n",
-                100.0 * run.off, signs.c_str(), continuity, o.segment_frames, r.iterations,
+                100.0 * run.off, signs.c_str(), continuity, o.segment_frames, run.grow_segments,
+                r.iterations,
                 r.termination.c_str(), r.wall_time_s, r.start_cost_m2, r.observation_cost_m2,
                 score.within_1pct, truth.size(), 100.0 * score.median_error,
                 100.0 * score.worst_error, score.worst_name.c_str(), score.open_loop_rms_m);
@@ -711,10 +722,12 @@ void walkerOutputError(const Settings& s) {
   const std::vector<double> bound = mme::cramerRaoBound(scene.model, data, space, 1e-4);
   std::FILE* g = openCsv(s.out_dir + "/walker_oe_params.csv",
                          "parameter,true_value,error_from_truth_percent,error_from_1pct_percent,"
-                         "error_hard_only_percent,cramer_rao_0.1mm_percent");
+                         "error_hard_only_percent,error_from_1pct_growing_percent,"
+                         "cramer_rao_0.1mm_percent");
   for (size_t k = 0; k < truth.size(); ++k) {
     std::fprintf(g, "%s,%.9g", refs[k].name.c_str(), truth[k]);
-    for (size_t a = 0; a < 3; ++a) std::fprintf(g, ",%.6g", 100.0 * (answers[a][k] / truth[k] - 1.0));
+    for (size_t a : {size_t{0}, size_t{1}, size_t{2}, growing})
+      std::fprintf(g, ",%.6g", 100.0 * (answers[a][k] / truth[k] - 1.0));
     std::fprintf(g, ",%.6g\n", 100.0 * bound[k] / std::fabs(truth[k]));
   }
   std::fclose(g);

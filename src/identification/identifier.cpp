@@ -514,6 +514,9 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
       if (usable(oe) && oe.observation_cost_m2 <= best_oe.observation_cost_m2 * (1.0 + 1e-9)) best_oe = oe;
       note("output error: " + std::to_string(best_oe.segments) + " segments, " +
                std::to_string(best_oe.iterations) + " iterations of the final fit (" +
+               (best_oe.stages > 1 ? "over " + std::to_string(best_oe.stages) +
+                                         " stages growing the data, "
+                                   : std::string()) +
                (best_oe.converged ? "converged" : best_oe.termination) + "), marker noise from its residuals " +
                formatValue(best_oe.noise_std_m) + " m (from the data " + formatValue(r.noise_estimate_m) + " m)",
            generations_done, evaluations_done);

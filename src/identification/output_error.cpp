@@ -303,10 +303,13 @@ void dataState(const Problem& p, int t, double* state) {
 
 }  // namespace
 
-OutputErrorResult estimateOutputError(const Model& model, const Trajectory& trajectory,
-                                      const ParameterSpace& space,
-                                      const std::vector<double>& start_genes,
-                                      const OutputErrorOptions& options) {
+namespace {
+
+/// One fit on the whole trajectory (the stages of OutputErrorOptions::grow_segments call it on
+/// its first frames).
+OutputErrorResult fitOnce(const Model& model, const Trajectory& trajectory,
+                          const ParameterSpace& space, const std::vector<double>& start_genes,
+                          const OutputErrorOptions& options) {
   const auto began = std::chrono::steady_clock::now();
   OutputErrorResult out;
   out.genes = start_genes;
@@ -543,6 +546,70 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
   }
   out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
   return out;
+}
+
+}  // namespace
+
+OutputErrorResult estimateOutputError(const Model& model, const Trajectory& trajectory,
+                                      const ParameterSpace& space,
+                                      const std::vector<double>& start_genes,
+                                      const OutputErrorOptions& options) {
+  const int K = options.segment_frames;
+  if (options.grow_segments < 0) {
+    OutputErrorResult out;
+    out.genes = start_genes;
+    out.values = space.toPhysical(start_genes);
+    out.std_devs.assign(start_genes.size(), std::numeric_limits<double>::quiet_NaN());
+    out.unidentifiable.assign(start_genes.size(), 0);
+    out.reason = "grow_segments must be >= 0, got " + std::to_string(options.grow_segments);
+    return out;
+  }
+  if (options.grow_segments == 0 || K < 2 ||
+      static_cast<long>(options.grow_segments) * K + 1 >= trajectory.numFrames())
+    return fitOnce(model, trajectory, space, start_genes, options);
+  // Continuation in the data's length: the first grow_segments segments' frames, then twice as
+  // many, ..., then all, each stage from the last one's answer. One noise figure (the whole
+  // data's) weights every stage; the last stage alone estimates the std.
+  const auto began = std::chrono::steady_clock::now();
+  const auto elapsed_s = [&]() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+  };
+  OutputErrorOptions stage = options;
+  stage.grow_segments = 0;
+  if (!(stage.noise_std_m > 0.0)) stage.noise_std_m = std::max(estimateMarkerNoise(trajectory), 1e-9);
+  std::vector<double> genes = start_genes;
+  int iterations = 0, stages = 0;
+  for (long segments = options.grow_segments;; segments *= 2) {
+    const bool last = segments * K + 1 >= trajectory.numFrames();
+    stage.estimate_std = last && options.estimate_std;
+    if (options.max_time_s > 0.0) stage.max_time_s = std::max(1e-3, options.max_time_s - elapsed_s());
+    const Trajectory part =
+        last ? trajectory : sliceFrames(trajectory, 0, static_cast<int>(segments * K + 1));
+    OutputErrorResult r = fitOnce(model, part, space, genes, stage);
+    if (!r.ran) {
+      r.reason = "on the first " + std::to_string(part.numFrames()) + " frames: " + r.reason;
+      return r;
+    }
+    iterations += r.iterations;
+    ++stages;
+    genes = r.genes;
+    const bool stopped = (options.cancel && options.cancel->load()) ||
+                         (options.max_time_s > 0.0 && elapsed_s() >= options.max_time_s);
+    if (last || stopped) {
+      // Stopped early: the answer so far, judged on the whole data (its costs are what callers
+      // compare), with no iteration.
+      if (!last) {
+        stage.max_iterations = 0;
+        stage.max_time_s = 0.0;
+        r = fitOnce(model, trajectory, space, genes, stage);
+      }
+      r.noise_std_prior_m = stage.noise_std_m;
+      r.iterations = iterations;
+      r.stages = stages;
+      r.wall_time_s = elapsed_s();
+      return r;
+    }
+  }
 }
 
 std::vector<double> cramerRaoBound(const Model& model, const Trajectory& trajectory,

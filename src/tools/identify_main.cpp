@@ -27,6 +27,7 @@ const char* kUsage =
     "                [--compare-to-model] [--target-cost C] [--max-time-s S] [--quiet]\n"
     "                [--preset default|paper] [--patience G]\n"
     "                [--cost auto|short_term|output_error] [--segment-frames K]\n"
+    "                [--grow-segments G]\n"
     "                [--refine bobyqa|newuoa|praxis|levenberg_marquardt] [--refine-start G]\n"
     "                [--refine-period G] [--select-structure]\n"
     "                [--add-muscles INPUTS] [--muscle-hidden H]\n"
@@ -44,7 +45,7 @@ int run(int argc, char** argv) {
                     {"model", "trajectory", "topic", "out", "method", "generations", "population",
                      "window-frames", "first-frame", "frames", "seed", "threads", "target-cost",
                      "max-time-s", "refine", "refine-start", "refine-period", "preset", "patience", "cost", "segment-frames",
-                     "add-muscles", "muscle-hidden", "sensor-muscles", "muscle-neighbours",
+                     "grow-segments", "add-muscles", "muscle-hidden", "sensor-muscles", "muscle-neighbours",
                      "rollout-rounds", "muscle-anchors", "anchor-stiffness"},
                     {"compare-to-model", "quiet", "help", "select-structure"});
   if (args.has("help")) {
@@ -76,6 +77,8 @@ int run(int argc, char** argv) {
                           "' is unknown (available: auto, short_term or output_error)");
   options.output_error.segment_frames = static_cast<int>(
       args.getInt("segment-frames", options.output_error.segment_frames, 2, 100000));
+  options.output_error.grow_segments = static_cast<int>(
+      args.getInt("grow-segments", options.output_error.grow_segments, 0, 100000));
   options.generations = static_cast<int>(args.getInt("generations", 1000, 1, 100000000));
   options.es.population = static_cast<int>(args.getInt("population", 100, 2, 1000000));
   options.es.offspring = options.es.population;

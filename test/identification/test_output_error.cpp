@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/short_term_cost.h"
@@ -132,6 +133,54 @@ TEST(OutputError, ThreadsShareEachSegmentsSimulationWithoutChangingTheAnswer) {
   EXPECT_EQ(two.genes, again.genes);
   EXPECT_EQ(one.observation_cost_m2, two.observation_cost_m2);
   EXPECT_EQ(one.iterations, two.iterations);
+}
+
+// Growing the data (grow_segments): the fit runs on the first segment's frames, then on 2, 4 and
+// 8 segments' and then on all 100 (5 stages), each from the last answer; it reaches the plain
+// fit's optimum, judged on every frame (its last stage starts from the fit on 81 frames, as
+// close to the data as the truth), a stop by time still reports the cost on every frame, and a
+// negative count is refused by name.
+TEST(OutputError, GrowingTheDataEndsAtThePlainFitsOptimumJudgedOnEveryFrame) {
+  Noisy n;
+  const mme::Trajectory data = n.noisy(1e-4, 13);
+  const mme::ParameterSpace space(n.search, data);
+  const std::vector<double> start = n.offStart(space, 0.1);
+  mme::OutputErrorOptions o;
+  o.estimate_std = false;
+  const mme::OutputErrorResult plain = mme::estimateOutputError(n.search, data, space, start, o);
+  o.grow_segments = 1;
+  const mme::OutputErrorResult grown = mme::estimateOutputError(n.search, data, space, start, o);
+  ASSERT_TRUE(plain.ran && grown.ran) << plain.reason << grown.reason;
+  EXPECT_EQ(plain.stages, 1);
+  EXPECT_EQ(grown.stages, 5);
+  EXPECT_EQ(grown.observations, plain.observations);
+  EXPECT_EQ(grown.segments, plain.segments);
+  // The last stage starts as close to the data as the truth does (segment states fitted to
+  // their first 2 frames, no iteration: 4.6e-4 m^2), the plain fit 5.8x farther.
+  mme::OutputErrorOptions none = o;
+  none.grow_segments = 0;
+  none.max_iterations = 0;
+  const mme::OutputErrorResult at_truth =
+      mme::estimateOutputError(n.search, data, space, space.toSearch(n.true_values), none);
+  ASSERT_TRUE(at_truth.ran) << at_truth.reason;
+  EXPECT_LT(grown.start_cost_m2, 1.05 * at_truth.observation_cost_m2);
+  EXPECT_GT(plain.start_cost_m2, 3.0 * at_truth.observation_cost_m2);
+  EXPECT_NEAR(grown.observation_cost_m2, plain.observation_cost_m2, 1e-6 * plain.observation_cost_m2);
+  EXPECT_LT(maxRelativeError(grown.values, plain.values), 1e-4);
+  EXPECT_LT(maxRelativeError(grown.values, n.true_values), 0.01);
+
+  o.max_time_s = 1e-3;  // stops in the first stage: the answer so far, judged on every frame
+  const mme::OutputErrorResult stopped = mme::estimateOutputError(n.search, data, space, start, o);
+  ASSERT_TRUE(stopped.ran) << stopped.reason;
+  EXPECT_EQ(stopped.stages, 1);
+  EXPECT_EQ(stopped.observations, plain.observations);
+  EXPECT_TRUE(std::isfinite(stopped.observation_cost_m2));
+
+  o.max_time_s = 0.0;
+  o.grow_segments = -1;
+  const mme::OutputErrorResult refused = mme::estimateOutputError(n.search, data, space, start, o);
+  EXPECT_FALSE(refused.ran);
+  EXPECT_NE(refused.reason.find("grow_segments"), std::string::npos) << refused.reason;
 }
 
 // The walker's stiff contact and servos act within a frame: the frame difference is not the
