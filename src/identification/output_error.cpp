@@ -597,13 +597,13 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
                          (options.max_time_s > 0.0 && elapsed_s() >= options.max_time_s);
     if (last || stopped) {
       // Stopped early: the answer so far, judged on the whole data (its costs are what callers
-      // compare), with no iteration.
+      // compare, its std what they report), with no iteration.
       if (!last) {
         stage.max_iterations = 0;
         stage.max_time_s = 0.0;
+        stage.estimate_std = options.estimate_std;
         r = fitOnce(model, trajectory, space, genes, stage);
       }
-      r.noise_std_prior_m = stage.noise_std_m;
       r.iterations = iterations;
       r.stages = stages;
       r.wall_time_s = elapsed_s();
