@@ -702,9 +702,10 @@ void walkerOutputError(const Settings& s) {
     const std::string signs =
         run.signs_seed == 0 ? "alternate" : "random_seed_" + std::to_string(run.signs_seed);
     std::fprintf(f, "%g,%s,%s,%d,%d,%d,%s,%.2f,%.6g,%.6g,%d,%.6g,%.6g,%.6g\n", run.off,
-                 signs.c_str(), continuity, o.segment_frames, run.grow_segments, r.iterations, r.converged ? "converged" : "limit",
-                 r.wall_time_s, r.start_cost_m2, r.observation_cost_m2, score.within_1pct,
-                 score.median_error, score.worst_error, score.open_loop_rms_m);
+                 signs.c_str(), continuity, o.segment_frames, run.grow_segments, r.iterations,
+                 r.converged ? "converged" : "limit", r.wall_time_s, r.start_cost_m2,
+                 r.observation_cost_m2, score.within_1pct, score.median_error, score.worst_error,
+                 score.open_loop_rms_m);
     std::fflush(f);
     std::printf("walker_oe: from %g %% off (%s signs), %s continuity, %d-frame segments, "
                 "growing from %d segment(s) (0: all at once): %d "
