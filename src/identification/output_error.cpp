@@ -576,13 +576,15 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
   };
   OutputErrorOptions stage = options;
   stage.grow_segments = 0;
-  if (!(stage.noise_std_m > 0.0)) stage.noise_std_m = std::max(estimateMarkerNoise(trajectory), 1e-9);
+  if (!(stage.noise_std_m > 0.0))
+    stage.noise_std_m = std::max(estimateMarkerNoise(trajectory), 1e-9);
   std::vector<double> genes = start_genes;
   int iterations = 0, stages = 0;
   for (long segments = options.grow_segments;; segments *= 2) {
     const bool last = segments * K + 1 >= trajectory.numFrames();
     stage.estimate_std = last && options.estimate_std;
-    if (options.max_time_s > 0.0) stage.max_time_s = std::max(1e-3, options.max_time_s - elapsed_s());
+    if (options.max_time_s > 0.0)
+      stage.max_time_s = std::max(1e-3, options.max_time_s - elapsed_s());
     const Trajectory part =
         last ? trajectory : sliceFrames(trajectory, 0, static_cast<int>(segments * K + 1));
     OutputErrorResult r = fitOnce(model, part, space, genes, stage);

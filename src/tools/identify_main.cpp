@@ -45,8 +45,8 @@ int run(int argc, char** argv) {
                     {"model", "trajectory", "topic", "out", "method", "generations", "population",
                      "window-frames", "first-frame", "frames", "seed", "threads", "target-cost",
                      "max-time-s", "refine", "refine-start", "refine-period", "preset", "patience", "cost", "segment-frames",
-                     "grow-segments", "add-muscles", "muscle-hidden", "sensor-muscles", "muscle-neighbours",
-                     "rollout-rounds", "muscle-anchors", "anchor-stiffness"},
+                     "grow-segments", "add-muscles", "muscle-hidden", "sensor-muscles",
+                     "muscle-neighbours", "rollout-rounds", "muscle-anchors", "anchor-stiffness"},
                     {"compare-to-model", "quiet", "help", "select-structure"});
   if (args.has("help")) {
     std::cout << kUsage;

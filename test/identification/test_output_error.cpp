@@ -165,7 +165,8 @@ TEST(OutputError, GrowingTheDataEndsAtThePlainFitsOptimumJudgedOnEveryFrame) {
   ASSERT_TRUE(at_truth.ran) << at_truth.reason;
   EXPECT_LT(grown.start_cost_m2, 1.05 * at_truth.observation_cost_m2);
   EXPECT_GT(plain.start_cost_m2, 3.0 * at_truth.observation_cost_m2);
-  EXPECT_NEAR(grown.observation_cost_m2, plain.observation_cost_m2, 1e-6 * plain.observation_cost_m2);
+  EXPECT_NEAR(grown.observation_cost_m2, plain.observation_cost_m2,
+              1e-6 * plain.observation_cost_m2);
   EXPECT_LT(maxRelativeError(grown.values, plain.values), 1e-4);
   EXPECT_LT(maxRelativeError(grown.values, n.true_values), 0.01);
 
