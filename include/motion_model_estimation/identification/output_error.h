@@ -47,8 +47,8 @@ struct OutputErrorOptions {
   /// `grow_segments` segments, then on twice as many segments, and so on, then on all the
   /// frames, each stage from the last one's answer with both continuity stages and
   /// max_iterations (max_time_s bounds them all; a stop by time or `cancel` still judges the
-  /// answer on every frame). Each stage starts the next nearer the answer than the start was:
-  /// a way around local minima of the fit on every frame. Measured on the walker (bench_paper --only walker_oe, 50 frames, 10-frame segments, 1 % off): see the
+  /// answer on every frame): a way around local minima of one fit on every frame. Measured on
+  /// the walker (bench_paper --only walker_oe, 50 frames, 10-frame segments, 1 % off): see the
   /// README "Identifying the walker". The result's iterations and wall time cover every stage;
   /// its start_cost_m2 is the last stage's start (the previous stage's answer on all frames).
   /// 0: one fit on every frame.
