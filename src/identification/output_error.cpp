@@ -317,8 +317,9 @@ OutputErrorResult fitOnce(const Model& model, const Trajectory& trajectory,
   out.std_devs.assign(start_genes.size(), std::numeric_limits<double>::quiet_NaN());
   out.unidentifiable.assign(start_genes.size(), 0);
   if (options.segment_frames < 2 || !(options.continuity_weight > 0.0) ||
-      !(options.first_continuity_weight >= 0.0)) {
-    out.reason = "segment_frames must be >= 2, continuity_weight > 0 and first_continuity_weight >= 0";
+      !(options.first_continuity_weight >= 0.0) || options.grow_segments < 0) {
+    out.reason = "segment_frames must be >= 2, continuity_weight > 0, first_continuity_weight >= 0 "
+                 "and grow_segments >= 0";
     return out;
   }
   auto p = std::make_unique<Problem>();
@@ -555,16 +556,8 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
                                       const std::vector<double>& start_genes,
                                       const OutputErrorOptions& options) {
   const int K = options.segment_frames;
-  if (options.grow_segments < 0) {
-    OutputErrorResult out;
-    out.genes = start_genes;
-    out.values = space.toPhysical(start_genes);
-    out.std_devs.assign(start_genes.size(), std::numeric_limits<double>::quiet_NaN());
-    out.unidentifiable.assign(start_genes.size(), 0);
-    out.reason = "grow_segments must be >= 0, got " + std::to_string(options.grow_segments);
-    return out;
-  }
-  if (options.grow_segments == 0 || K < 2 ||
+  // Nothing to grow, or options fitOnce refuses (with its reason).
+  if (options.grow_segments <= 0 || K < 2 ||
       static_cast<long>(options.grow_segments) * K + 1 >= trajectory.numFrames())
     return fitOnce(model, trajectory, space, start_genes, options);
   // Continuation in the data's length: the first grow_segments segments' frames, then twice as

@@ -10,14 +10,14 @@
 namespace mmetest {
 
 /// True when the master at ROS_MASTER_URI answers (call after ros::init); otherwise prints why
-/// `test` cannot run and how to run it, and returns false.
-inline bool masterAnswers(const char* test) {
+/// this node cannot run and how to run it, and returns false.
+inline bool masterAnswers() {
   if (ros::master::check()) return true;
   std::fprintf(stderr,
                "%s: no ROS master answers at %s; this test runs under rostest, which starts one: "
                "`scripts/test`, `catkin_make run_tests`, or `rostest motion_model_estimation "
                "<its .test file in test/ros>`\n",
-               test, ros::master::getURI().c_str());
+               ros::this_node::getName().c_str(), ros::master::getURI().c_str());
   return false;
 }
 

@@ -183,7 +183,7 @@ TEST(EstimatorNode, SurvivesAndCountsBadInput) {
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "test_estimator_bad_input");
-  if (!mmetest::masterAnswers("test_estimator_bad_input")) return 2;
+  if (!mmetest::masterAnswers()) return 2;
   ros::NodeHandle nh;
   ros::AsyncSpinner spinner(1);
   spinner.start();

@@ -290,7 +290,7 @@ TEST(EstimatorNode, ConvergesToTheTruth) {
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "test_estimator_convergence");
-  if (!mmetest::masterAnswers("test_estimator_convergence")) return 2;
+  if (!mmetest::masterAnswers()) return 2;
   ros::NodeHandle nh;  // keeps the node alive for the spinner
   ros::AsyncSpinner spinner(1);
   spinner.start();

@@ -248,7 +248,7 @@ TEST(EstimatorServices, LoadModelRefusesBadPathsAndKeepsTheModel) {
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "test_estimator_services");
-  if (!mmetest::masterAnswers("test_estimator_services")) return 2;
+  if (!mmetest::masterAnswers()) return 2;
   ros::NodeHandle nh, pnh("~");
   ros::AsyncSpinner spinner(1);
   spinner.start();

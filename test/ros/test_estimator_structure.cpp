@@ -110,6 +110,6 @@ TEST(EstimatorStructure, ChoosesTheStructureIdentifiesItAndChoosesAgainOnReset) 
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "test_estimator_structure");
-  if (!mmetest::masterAnswers("test_estimator_structure")) return 2;
+  if (!mmetest::masterAnswers()) return 2;
   return RUN_ALL_TESTS();
 }

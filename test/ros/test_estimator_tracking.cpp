@@ -91,7 +91,7 @@ TEST(EstimatorNode, TracksAParameterStep) {
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "test_estimator_tracking");
-  if (!mmetest::masterAnswers("test_estimator_tracking")) return 2;
+  if (!mmetest::masterAnswers()) return 2;
   ros::NodeHandle nh;
   ros::AsyncSpinner spinner(1);
   spinner.start();

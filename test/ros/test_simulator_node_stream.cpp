@@ -66,6 +66,6 @@ TEST(SimulatorNode, StreamsTheSceneAsMovingMarkerFrames) {
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "test_simulator_node_stream");
-  if (!mmetest::masterAnswers("test_simulator_node_stream")) return 2;
+  if (!mmetest::masterAnswers()) return 2;
   return RUN_ALL_TESTS();
 }
