@@ -808,7 +808,8 @@ void figure5(const Settings& s) {
   }
   mme::StructureOptions so = structureOptions(s);
   for (const char* file : {"motion_capture_walk.trc", "subject01_walk1.trc", "arm26_elbow_flex.trc",
-                           "Sample01_Eb015pi.c3d", "Sample26_Walking_Hybrid_1_1.c3d"}) {
+                           "Sample01_Eb015pi.c3d", "Sample02_dec_real.c3d", "Sample02_pc_int.c3d",
+                           "Sample26_Walking_Hybrid_1_1.c3d"}) {
     if (s.quick && std::string(file) != "arm26_elbow_flex.trc") continue;
     if (!s.wantsFig5Case(file)) continue;
     mme::Trajectory data = mme::readTrajectoryFile(std::string(MME_TEST_DATA_DIR) + "/real/" + file);

@@ -129,6 +129,8 @@ EstimatorNodeOptions readEstimatorOptions(const ros::NodeHandle& pnh) {
   require(e.refine_max_s > 0.0 && std::isfinite(e.refine_max_s), "~refine_max_sec must be > 0");
   read(pnh, "segment_frames", &e.output_error.segment_frames);
   require(e.output_error.segment_frames >= 2, "~segment_frames must be >= 2");
+  read(pnh, "grow_segments", &e.output_error.grow_segments);
+  require(e.output_error.grow_segments >= 0, "~grow_segments must be >= 0 (0 = off)");
   read(pnh, "population", &e.es.population);
   require(e.es.population >= 2, "~population must be >= 2");
   e.es.offspring = e.es.population;

@@ -52,6 +52,7 @@ expect_exit2 "~preset must be default or paper" _model:="$model" _preset:=fast
 expect_exit2 "~cost must be auto, short_term or output_error" _model:="$model" _cost:=robust
 expect_exit2 "~update_budget_sec must be > 0" _model:="$model" _update_budget_sec:=0.0
 expect_exit2 "~segment_frames must be >= 2" _model:="$model" _segment_frames:=1
+expect_exit2 "~grow_segments must be >= 0 (0 = off)" _model:="$model" _grow_segments:=-1
 expect_exit2 "~prediction_period_sec must be >= 0" _model:="$model" _prediction_period_sec:=-1.0
 expect_exit2 "~min_frames" _model:="$model" _window_frames:=20 _min_frames:=50
 expect_exit2 "missing_model.yaml" _model:="$tmp/missing_model.yaml"
@@ -66,7 +67,7 @@ expect_exit2 "bad_model.yaml" _model:="$tmp/bad_model.yaml"
 export ROSCONSOLE_STDOUT_LINE_BUFFERED=1
 started="20 free parameters, window 100 frames, population 60"
 rosrun motion_model_estimation estimator_node __name:=good _model:="$model" \
-  _window_frames:=100 _population:=60 </dev/null >"$tmp/out" 2>&1 &
+  _window_frames:=100 _population:=60 _grow_segments:=2 </dev/null >"$tmp/out" 2>&1 &
 good=$!
 for _ in $(seq 300); do
   grep -q "$started" "$tmp/out" && break
