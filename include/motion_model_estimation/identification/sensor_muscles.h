@@ -52,10 +52,12 @@
 // better). The window and ridge are chosen by holding out the data's last
 // `validation_fraction`: each candidate is fitted on the frames before and judged by the
 // open-loop prediction `horizon_frames` ahead on the held-out ones (evaluatePredictions, its
-// rollout bounded first); the chosen one is refitted on every frame, and that refit is run 10x
-// the validation frames open loop from the validation start and from 8 frames spread over the
-// data: when one of those rollouts leaves the data (a refit can, where the validation fit did
-// not), the next candidate is refitted instead (up to 4). The gain is then set to
+// rollout bounded first); the chosen one is refitted on every frame, and that refit is run open
+// loop from the validation start and from 8 frames spread over the data, 10x the frames a
+// held-out test of the same share would judge were these data its fitted part (validation
+// frames / (1 - validation_fraction)): when one of those rollouts leaves the validation frames' box (10 of its extents from its
+// centre, as a held-out test bounds by its own frames; a refit can, where the validation fit
+// did not), the next candidate is refitted instead (up to 4). The gain is then set to
 // `gain_margin` times the largest linear activation over the fitted frames and the weights
 // divided by it, so tanh stays within 0.4 % of linear where the data went (and bounds the
 // activation beyond).
@@ -213,8 +215,9 @@ struct SensorMuscleResult {
   /// The chosen fit predicted the validation frames better than the passive model (by 1 % of
   /// the larger of its and the constant-velocity guess's errors: a fit of the residue of a
   /// passive model that already explains the data is not kept), its rollout
-  /// bounded, and its refit on every frame stays bounded over 10x rollouts from the validation
-  /// start and from 8 frames spread over the data (a refit that does not is replaced by the next
+  /// bounded, and its refit on every frame stays bounded over rollouts from the validation
+  /// start and from 8 frames spread over the data (10x validation / (1 - validation_fraction)
+  /// frames), within 10 extents of the validation frames' box (a refit that does not is replaced by the next
   /// candidate, up to 4 tried); when false, keep the passive model.
   bool better_than_passive = false;
   /// Why better_than_passive is false, in words (empty when it is true).
