@@ -55,12 +55,12 @@
 // rollout bounded first); the chosen one is refitted on every frame, and that refit is run open
 // loop from the validation start and from 8 frames spread over the data, 10x the frames a
 // held-out test of the same share would judge were these data its fitted part (validation
-// frames / (1 - validation_fraction)): when one of those rollouts leaves the validation frames' box (10 of its extents from its
-// centre, as a held-out test bounds by its own frames; a refit can, where the validation fit
-// did not), the next candidate is refitted instead (up to 4). The gain is then set to
-// `gain_margin` times the largest linear activation over the fitted frames and the weights
-// divided by it, so tanh stays within 0.4 % of linear where the data went (and bounds the
-// activation beyond).
+// frames / (1 - validation_fraction)): when one of those rollouts leaves the validation frames'
+// box (10 of its extents from its centre, as a held-out test bounds by its own frames; a refit
+// can, where the validation fit did not), the next candidate is refitted instead (up to 4).
+// The gain is then set to `gain_margin` times the largest linear activation over the fitted
+// frames and the weights divided by it, so tanh stays within 0.4 % of linear where the data
+// went (and bounds the activation beyond).
 //
 // Activation dynamics (`activation_times_frames`): a posture-driven muscle cannot tell a drive
 // that changes in time (an arm moved by excitations), which the constant-acceleration guess
@@ -217,8 +217,8 @@ struct SensorMuscleResult {
   /// passive model that already explains the data is not kept), its rollout
   /// bounded, and its refit on every frame stays bounded over rollouts from the validation
   /// start and from 8 frames spread over the data (10x validation / (1 - validation_fraction)
-  /// frames), within 10 extents of the validation frames' box (a refit that does not is replaced by the next
-  /// candidate, up to 4 tried); when false, keep the passive model.
+  /// frames), within 10 extents of the validation frames' box (a refit that does not is
+  /// replaced by the next candidate, up to 4 tried); when false, keep the passive model.
   bool better_than_passive = false;
   /// Why better_than_passive is false, in words (empty when it is true).
   std::string not_kept_because;
