@@ -1178,8 +1178,9 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
       break;
     }
     say(o, "sensor muscles: ridge " + formatRidge(c.ridge) + ", " + std::to_string(c.rollout_rounds) +
-        " rollout round(s), refitted on every frame: a 10x rollout of it (from the validation "
-        "start or from one of 8 frames over the data) leaves the data; the next candidate");
+        " rollout round(s), refitted on every frame: a rollout of it " +
+        std::to_string(final_rollout_frames) + " frames long (from the validation start or from one "
+        "of 8 frames over the data) leaves the validation frames' box; the next candidate");
   }
   if (first_theta.size() == 0) throw InputError("sensor muscles: the final solve failed");
   if (!final_bounded) {
