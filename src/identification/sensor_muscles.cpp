@@ -1083,11 +1083,10 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
   // rollouts, from the validation start and from 8 frames spread over the data (the last one near
   // where a held-out test starts), each bounded by the validation frames' box as a held-out test
   // is by its own frames' (the whole data's box can be larger: a body that walks in lets a
-  // rollout drift farther) and as long as final_rollout_frames: when
-  // one leaves the data (a refit can, where the validation fit did not), the next candidate of
-  // the same window (bounded in validation, by validation error) is refitted instead, up to
-  // kMaxFinalFits; when none stays bounded, the first is kept and reported not better than the
-  // passive model.
+  // rollout drift farther), each final_rollout_frames long: when one leaves the data (a refit
+  // can, where the validation fit did not), the next candidate of the same window (bounded in
+  // validation, by validation error) is refitted instead, up to kMaxFinalFits; when none stays
+  // bounded, the first is kept and reported not better than the passive model.
   constexpr int kMaxFinalFits = 4;
   constexpr int kFinalRolloutStarts = 8;
   // 10x the frames a held-out test of the same share judges when these data are its fitted part

@@ -503,6 +503,8 @@ TEST(SensorMuscles, TheWrittenModelStaysBoundedFromAnywhereInTheData) {
     }
   const Eigen::Vector3d centre = 0.5 * (lo + hi);
   const double limit_m = 10.0 * (hi - lo).norm();
+  const int rollout =
+      static_cast<int>(std::ceil(10.0 * (validation / (1.0 - o.validation_fraction) + 2.0)));
   mme::Simulator sim(r.model);
   for (int k = 1; k <= 8; ++k) {
     const int t = 1 + (kFitted - 2) * k / 8;
@@ -515,7 +517,6 @@ TEST(SensorMuscles, TheWrittenModelStaysBoundedFromAnywhereInTheData) {
       s.x_m[i] = fitted.position(t, i);
       if (!r.model.particles[i].fixed) s.v_mps[i] = (fitted.position(t, i) - fitted.position(t - 1, i)) * fitted.frame_rate_hz;
     }
-    const int rollout = static_cast<int>(std::ceil(10.0 * (validation / (1.0 - o.validation_fraction) + 2.0)));
     for (int step = 0; step < rollout; ++step) {
       sim.stepFrame(&s, 1.0 / fitted.frame_rate_hz);
       for (int i = 1; i < 4; ++i)
