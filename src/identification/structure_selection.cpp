@@ -1232,8 +1232,36 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       int types = 0;
       Model typed = typeBonds(solved, first_candidate_type, options.type_sigmas, &types);
       // Types with no bond left (non-physical drops) do not exist in `solved.model`; typed too.
-      if (nonlinear) convergeLinearized(&typed, fit, level_ee);
-      const EquationErrorResult typed_fit = solveEquationError(typed, fit, level_ee);
+      // The typed model's joint fit can come out non-physical where each bond's own did not
+      // (merged columns, worse conditioned): such a type is held at the values typing gave it
+      // (the weighted mean of its bonds' own, physical values), the others solved again, and
+      // it counts as free in the criterion (before: one such type dropped the whole typing,
+      // silently, whatever the criterion said).
+      std::vector<std::pair<int, ParamId>> held;
+      EquationErrorResult typed_fit;
+      for (int round = 0;; ++round) {
+        if (nonlinear) convergeLinearized(&typed, fit, level_ee);
+        typed_fit = solveEquationError(typed, fit, level_ee);
+        if (!typed_fit.applicable || round == kMaxPasses) break;
+        const std::vector<ParamRef> refs = freeParameters(typed);
+        std::set<int> bad;
+        for (size_t k = 0; k < refs.size(); ++k)
+          if (!std::isfinite(typed_fit.values[k]) && refs[k].bond_type >= first_candidate_type)
+            bad.insert(refs[k].bond_type);
+        if (bad.empty()) break;
+        for (int t : bad)
+          for (ParamId id : paramsOfKind(typed.bond_types[t].kind))
+            if (typed.bond_types[t].param(id).free) {
+              typed.bond_types[t].param(id).free = false;
+              held.push_back({t, id});
+            }
+        say("structure: " + cand.name + ": " + std::to_string(bad.size()) +
+            " type(s) non-physical in the typed fit: held at their bonds' mean values");
+      }
+      bool typed_usable = typed_fit.applicable;
+      for (double v : typed_fit.values) typed_usable = typed_usable && std::isfinite(v);
+      if (typed_usable) setValues(typed, freeParameters(typed), typed_fit.values);
+      for (const auto& h : held) typed.bond_types[h.first].param(h.second).free = true;
       const int typed_params = static_cast<int>(freeParameters(typed).size());
       Model chosen = solved.model;
       double fit_rss = sel.rss_m2;
@@ -1252,14 +1280,14 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
           say(line);
         }
         if (typed_bic <= untyped_bic) {
-          bool usable = true;
-          for (double v : typed_fit.values) usable = usable && std::isfinite(v);
-          if (usable) {
-            setValues(typed, freeParameters(typed), typed_fit.values);
+          if (typed_usable) {
             chosen = typed;
             fit_rss = typed_rss;
             params = typed_params;
             chosen_bic = typed_bic;
+          } else {
+            say("structure: " + cand.name + ": the typed fit has an undetermined value: one type "
+                "per bond kept");
           }
         }
       }

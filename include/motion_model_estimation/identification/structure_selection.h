@@ -21,7 +21,8 @@
 //    frames sorted by length; in rounds while the residual asks for more).
 // 3. Bond typing: bonds of one kind whose solved values (k, L, c; k, theta0, c; c_v) agree within
 //    3 of their standard deviations share a type, kept when the criterion says the merged model
-//    is as good.
+//    is as good. A type whose value comes out non-physical in the typed model's joint fit is held
+//    at its bonds' weighted mean values (still counted as free) and the rest solved again.
 // 4. Each level's typed model is refitted by the full identification (identifyModel) on the
 //    fitted frames and judged on the held-out frames (the end of the window, never fitted): the
 //    open-loop prediction error 10 frames ahead decides, the criterion breaks ties (within 2 %).
