@@ -1238,6 +1238,7 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       // it counts as free in the criterion (before: one such type dropped the whole typing,
       // silently, whatever the criterion said).
       std::vector<std::pair<int, ParamId>> held;
+      const Model typed_start = typed;  // typing's values, before any fit moved them
       EquationErrorResult typed_fit;
       for (int round = 0;; ++round) {
         if (nonlinear) convergeLinearized(&typed, fit, level_ee);
@@ -1252,6 +1253,7 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
         for (int t : bad)
           for (ParamId id : paramsOfKind(typed.bond_types[t].kind))
             if (typed.bond_types[t].param(id).free) {
+              typed.bond_types[t].param(id) = typed_start.bond_types[t].param(id);
               typed.bond_types[t].param(id).free = false;
               held.push_back({t, id});
             }
@@ -1260,6 +1262,9 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       }
       bool typed_usable = typed_fit.applicable;
       for (double v : typed_fit.values) typed_usable = typed_usable && std::isfinite(v);
+      for (const auto& h : held)  // as solveEquationError's rule: positive but a rest angle, k_nl
+        if (h.second != kRestAngle && h.second != kStiffnessNl)
+          typed_usable = typed_usable && typed.bond_types[h.first].param(h.second).value > 0.0;
       if (typed_usable) setValues(typed, freeParameters(typed), typed_fit.values);
       for (const auto& h : held) typed.bond_types[h.first].param(h.second).free = true;
       const int typed_params = static_cast<int>(freeParameters(typed).size());
