@@ -1291,8 +1291,10 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
             params = typed_params;
             chosen_bic = typed_bic;
           } else {
-            say("structure: " + cand.name + ": the typed fit has an undetermined value: one type "
-                "per bond kept");
+            const std::string why = "the criterion preferred shared types, but the typed fit "
+                                    "stayed non-physical or undetermined: one type per bond kept";
+            say("structure: " + cand.name + ": " + why);
+            result.notes.push_back(cand.name + ": " + why);
           }
         }
       }
