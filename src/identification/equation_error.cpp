@@ -393,6 +393,8 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
   return out;
 }
 
+bool physicalOnlyPositive(ParamId id) { return id != kRestAngle && id != kStiffnessNl; }
+
 EquationErrorResult solveEquationError(const Model& model, const Trajectory& trajectory,
                                        const EquationErrorOptions& options) {
   EquationErrorResult out;
@@ -427,7 +429,7 @@ EquationErrorResult solveEquationError(const Model& model, const Trajectory& tra
   // cubic stiffness is (a softening spring).
   for (size_t k = 0; k < refs.size(); ++k) {
     const ParamRef& r = refs[k];
-    if (r.bond_type >= 0 && r.param != kRestAngle && r.param != kStiffnessNl && !(out.values[k] > 0.0))
+    if (r.bond_type >= 0 && physicalOnlyPositive(static_cast<ParamId>(r.param)) && !(out.values[k] > 0.0))
       out.values[k] = std::numeric_limits<double>::quiet_NaN();
     if (!std::isfinite(out.values[k])) out.values[k] = std::numeric_limits<double>::quiet_NaN();
   }

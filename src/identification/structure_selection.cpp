@@ -1262,8 +1262,8 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       }
       bool typed_usable = typed_fit.applicable;
       for (double v : typed_fit.values) typed_usable = typed_usable && std::isfinite(v);
-      for (const auto& h : held)  // as solveEquationError's rule: positive but a rest angle, k_nl
-        if (h.second != kRestAngle && h.second != kStiffnessNl)
+      for (const auto& h : held)
+        if (physicalOnlyPositive(h.second))
           typed_usable = typed_usable && typed.bond_types[h.first].param(h.second).value > 0.0;
       if (typed_usable) setValues(typed, freeParameters(typed), typed_fit.values);
       for (const auto& h : held) typed.bond_types[h.first].param(h.second).free = true;

@@ -68,4 +68,8 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
 EquationErrorResult solveEquationError(const Model& model, const Trajectory& trajectory,
                                        const EquationErrorOptions& options = {});
 
+/// Whether a bond type's parameter is physical only when positive (solveEquationError's rule:
+/// every one but a flexion's rest angle and a cubic stiffness, which may soften).
+bool physicalOnlyPositive(ParamId id);
+
 }  // namespace mme
