@@ -1,6 +1,7 @@
 #include "motion_model_estimation/identification/sensor_muscles.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <deque>
@@ -735,8 +736,32 @@ void say(const SensorMuscleOptions& o, const std::string& line) {
   if (o.progress) o.progress(line);
 }
 
+/// SensorMuscleOptions::max_time_s, counted from the start of addSensorMuscles.
+class Budget {
+ public:
+  explicit Budget(double max_time_s) : max_time_s_(max_time_s), start_(std::chrono::steady_clock::now()) {}
+  double elapsedS() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+  bool spent() const { return max_time_s_ > 0.0 && elapsedS() >= max_time_s_; }
+  /// spent(), and when so a progress line saying what is not started (`what`).
+  bool stops(const SensorMuscleOptions& o, const std::string& what) const {
+    if (!spent()) return false;
+    char line[240];
+    std::snprintf(line, sizeof(line), "sensor muscles: time limit of %g s spent (%.1f s): no %s",
+                  max_time_s_, elapsedS(), what.c_str());
+    say(o, line);
+    return true;
+  }
+
+ private:
+  double max_time_s_;
+  std::chrono::steady_clock::time_point start_;
+};
+
 SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data,
-                                    const std::vector<char>& anchor, const SensorMuscleOptions& o);
+                                    const std::vector<char>& anchor, const SensorMuscleOptions& o,
+                                    const Budget& budget);
 
 }  // namespace
 
@@ -809,6 +834,8 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
                        "frames, got " + std::to_string(tau_frames));
   if (!(o.min_seen_share >= 0.0 && o.min_seen_share <= 1.0))
     throw InputError("sensor muscles: min_seen_share must be in [0, 1]");
+  if (!(o.max_time_s >= 0.0) || !std::isfinite(o.max_time_s))
+    throw InputError("sensor muscles: the time limit must be a finite number >= 0 s (0: none)");
   if (o.max_unknowns < 1 || o.max_unknowns > kMaxUnknowns)
     throw InputError("sensor muscles: max_unknowns must be 1.." + std::to_string(kMaxUnknowns) + ", got " +
                      std::to_string(o.max_unknowns));
@@ -826,7 +853,12 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
       throw InputError("sensor muscles: the passive model's '" + ref.name + "' has no value (identify it first)");
   if (!(o.travel_body_sizes > 0.0) || !std::isfinite(o.travel_body_sizes))
     throw InputError("sensor muscles: travel_body_sizes must be a finite number > 0");
-  if (!o.anchors) return fitSensorMuscles(passive, data, std::vector<char>(n, 0), o);
+  const Budget budget(o.max_time_s);
+  const auto timed = [&](SensorMuscleResult r) {
+    r.wall_time_s = budget.elapsedS();
+    return r;
+  };
+  if (!o.anchors) return timed(fitSensorMuscles(passive, data, std::vector<char>(n, 0), o, budget));
   // The anchor muscles' own stiffness (see the header): kAuto decided here, once for both layouts.
   const double travel = bodyTravel(passive, data);
   SensorMuscleOptions resolved = o;
@@ -848,13 +880,13 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   const auto tagged = [&](SensorMuscleResult r) {
     r.anchor_stiffness = r.anchors && anchor_stiffness;
     r.body_travel = travel;
-    return r;
+    return timed(std::move(r));
   };
   Model anchored = passive;
   Trajectory anchored_data = data;
   const std::vector<char> anchor = addAnchors(&anchored, &anchored_data, o.anchor_distance_extents);
   if (!o.anchors_by_validation) {
-    SensorMuscleResult with = fitSensorMuscles(anchored, anchored_data, anchor, resolved);
+    SensorMuscleResult with = fitSensorMuscles(anchored, anchored_data, anchor, resolved, budget);
     with.anchors = true;
     return tagged(with);
   }
@@ -865,19 +897,25 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   std::optional<SensorMuscleResult> with, without;
   try {
     say(o, "sensor muscles: with anchors");
-    with = fitSensorMuscles(anchored, anchored_data, anchor, resolved);
+    with = fitSensorMuscles(anchored, anchored_data, anchor, resolved, budget);
     with->anchors = true;
   } catch (const InputError& e) {
     say(o, std::string("sensor muscles: with anchors: ") + e.what());
   }
+  if (with && budget.stops(o, "fit without anchors (the fit with them is kept)")) {
+    with->stopped_by_time = true;
+    return tagged(*with);
+  }
   say(o, "sensor muscles: without anchors");
   try {
-    without = fitSensorMuscles(passive, data, std::vector<char>(n, 0), resolved);
+    without = fitSensorMuscles(passive, data, std::vector<char>(n, 0), resolved, budget);
   } catch (const InputError& e) {
     if (!with) throw;
     say(o, std::string("sensor muscles: without anchors: ") + e.what());
   }
   if (!with) return tagged(*without);
+  with->stopped_by_time = with->stopped_by_time || without->stopped_by_time;
+  without->stopped_by_time = with->stopped_by_time;
   if (!without) return tagged(*with);
   const bool plain_better =
       (without->better_than_passive && !with->better_than_passive) ||
@@ -896,7 +934,8 @@ namespace {
 
 /// addSensorMuscles on a checked model and data (anchors added when asked).
 SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data,
-                                    const std::vector<char>& anchor, const SensorMuscleOptions& o) {
+                                    const std::vector<char>& anchor, const SensorMuscleOptions& o,
+                                    const Budget& budget) {
   const int frames = data.numFrames();
   const int validation_start = static_cast<int>(std::floor((1.0 - o.validation_fraction) * frames));
   if (validation_start < 4 || frames - validation_start < o.horizon_frames + 1)
@@ -958,13 +997,23 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
   bool any_rows = false;
   System best_sys;  // the equations of the best candidate's window, to be completed below
   std::vector<Eigen::VectorXd> thetas;  // per candidate, its validation fit (empty: the solve failed)
+  // With a time limit (Budget): once spent, no further candidate after the first that gave a
+  // model, no rollout round and no activation time constant; the final refits below are not cut
+  // (a refit that leaves the data is common, and the next candidate's is what gives a model).
+  const auto stopsHere = [&](const std::string& what) {
+    if (!budget.stops(o, what)) return false;
+    result.stopped_by_time = true;
+    return true;
+  };
   for (int window : o.windows_frames) {
+    if (best >= 0 && stopsHere("further window")) break;
     System sys;
     fitter.accumulate(window, 0, validation_start - window, &sys);
     if (sys.rows == 0) continue;
     any_rows = true;
     const int window_first = static_cast<int>(result.candidates.size());
     for (double ridge : o.ridges) {
+      if (best >= 0 && stopsHere("further ridge")) break;
       SensorMuscleCandidate c;
       c.window_frames = window;
       c.ridge = ridge;
@@ -1006,12 +1055,15 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
   // equations can bound it): each round a candidate of its own.
   // Each runs from the one-step fit theta on data_rows; the ridge stays relative to those rows'
   // mean diagonal as rollout rows are added.
+  // `budgeted`: a round is not started once the time limit is spent (the candidates' rounds; the
+  // final refit runs its candidate's rounds all).
   auto runRounds = [&](const System& data_rows, double ridge, Eigen::VectorXd theta, int gain_t_end,
-                       int start_end, int rounds,
+                       int start_end, int rounds, bool budgeted,
                        const std::function<void(int, const Eigen::VectorXd&, const Fitter::RolloutCount&)>& each) {
     const double reference_diagonal = Fitter::meanDiagonal(data_rows);
     System all = data_rows;
     for (int round = 1; round <= rounds; ++round) {
+      if (budgeted && stopsHere("further rollout round")) return true;
       const Fitter::RolloutCount count =
           fitter.accumulateRollouts(theta, o.gain_margin, gain_t_end, o.horizon_frames,
                                     o.rollout_stride_frames, o.rollout_correction_frames, 1, start_end, &all);
@@ -1049,9 +1101,10 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
         round_starts.push_back(lower[k]);
   }
   for (int index : round_starts) {
+    if (budget.spent()) break;  // runRounds says so
     const SensorMuscleCandidate start = result.candidates[index];
     runRounds(best_sys, start.ridge, thetas[index], validation_start,
-              validation_start - o.horizon_frames - 1, o.rollout_rounds,
+              validation_start - o.horizon_frames - 1, o.rollout_rounds, true,
               [&](int round, const Eigen::VectorXd& theta, const Fitter::RolloutCount& count) {
                 SensorMuscleCandidate c = start;
                 c.rollout_rounds = round;
@@ -1109,6 +1162,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
     if (thetas[index].size() == 0) return chosen;
     for (double tau_frames : o.activation_times_frames) {
       if (!(tau_frames > 0.0)) continue;
+      if (stopsHere("further activation time constant")) break;
       double rms = std::nan("");
       bool bounded = false;
       try {
@@ -1144,14 +1198,16 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
   bool final_bounded = false;
   int accepted = best;
   Activation activation, first_activation;
+  size_t refits_tried = 0;
   for (int index : order) {
+    ++refits_tried;
     const SensorMuscleCandidate& c = result.candidates[index];
     Eigen::VectorXd t;
     if (!fitter.solve(sys, c.ridge, &t)) continue;
     if (c.rollout_rounds > 0) {
       say(o, "sensor muscles: ridge " + formatRidge(c.ridge) + ", " + std::to_string(c.rollout_rounds) +
           " rollout round(s) on every frame");
-      if (!runRounds(sys, c.ridge, t, frames, frames, c.rollout_rounds,
+      if (!runRounds(sys, c.ridge, t, frames, frames, c.rollout_rounds, false,
                      [&](int, const Eigen::VectorXd& r, const Fitter::RolloutCount&) { t = r; }))
         continue;
     }
@@ -1205,7 +1261,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
     std::snprintf(why, sizeof(why), "no candidate's 10x validation rollout stayed bounded");
   else if (!final_bounded)
     std::snprintf(why, sizeof(why), "every refit on all frames tried (%zu) left the data over its "
-                  "10x rollouts", order.size());
+                  "10x rollouts", refits_tried);
   else if (!better)
     std::snprintf(why, sizeof(why), "its validation error %.3g m is not below the passive model's "
                   "%.3g m by %.3g m, 1 %% of the larger of it and the constant-velocity guess's",

@@ -32,7 +32,11 @@ const char* kUsage =
     "                [--refine-period G] [--select-structure]\n"
     "                [--add-muscles INPUTS] [--muscle-hidden H]\n"
     "                [--sensor-muscles SENSORS] [--muscle-neighbours K] [--rollout-rounds R]\n"
-    "                [--muscle-anchors auto|0|1] [--anchor-stiffness 1|0|auto]\n";
+    "                [--muscle-anchors auto|0|1] [--anchor-stiffness 1|0|auto]\n"
+    "                [--muscles-max-time-s S]\n"
+    "--max-time-s bounds each passive identification (each structure level's refit, the final fit),\n"
+    "--muscles-max-time-s the sensor muscles' fit after them (checked between its steps, so a\n"
+    "step under way finishes); 0, the default for both: no limit.\n";
 
 std::string formatMetres(double m) {
   char text[32];
@@ -46,7 +50,8 @@ int run(int argc, char** argv) {
                      "window-frames", "first-frame", "frames", "seed", "threads", "target-cost",
                      "max-time-s", "refine", "refine-start", "refine-period", "preset", "patience", "cost", "segment-frames",
                      "grow-segments", "add-muscles", "muscle-hidden", "sensor-muscles",
-                     "muscle-neighbours", "rollout-rounds", "muscle-anchors", "anchor-stiffness"},
+                     "muscle-neighbours", "rollout-rounds", "muscle-anchors", "anchor-stiffness",
+                     "muscles-max-time-s"},
                     {"compare-to-model", "quiet", "help", "select-structure"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -138,6 +143,9 @@ int run(int argc, char** argv) {
     sensor_options.anchor_stiffness = stiffness == "auto" ? mme::AnchorStiffness::kAuto
                                       : stiffness == "1"  ? mme::AnchorStiffness::kFitted
                                                           : mme::AnchorStiffness::kNone;
+    // The muscles' own time limit (--max-time-s bounds the passive identification only): a
+    // capture of ~40 markers takes 10-25 minutes there without one.
+    sensor_options.max_time_s = args.getDouble("muscles-max-time-s", 0.0, 0.0, 1e9);
     sensor_options.progress = [quiet](const std::string& line) {
       if (!quiet) std::printf("identify: %s\n", line.c_str());
       std::fflush(stdout);
@@ -145,6 +153,9 @@ int run(int argc, char** argv) {
   } else if (muscle_options_given) {
     throw mme::InputError("--muscle-neighbours, --rollout-rounds, --muscle-anchors and --anchor-stiffness need sensor "
                           "muscles (--sensor-muscles 0 turns them off)");
+  } else if (args.has("muscles-max-time-s")) {
+    throw mme::InputError("--muscles-max-time-s needs sensor muscles (on by default only with "
+                          "--select-structure; --sensor-muscles SENSORS turns them on)");
   }
 
   if (compare && model_path.empty())
@@ -290,11 +301,12 @@ int run(int argc, char** argv) {
     std::snprintf(line, sizeof(line),
                   "sensor muscles: %d sensors, %d muscles, ridge %.0e, %d rollout round(s), "
                   "activation time constant %.3g s, %s anchors; %d frames ahead on the last frames "
-                  "%.3g m (passive %.3g m, constant velocity %.3g m)%s%s",
+                  "%.3g m (passive %.3g m, constant velocity %.3g m), %.0f s%s%s%s",
                   sm.sensors, sm.muscles, sm.ridge, sm.candidates[sm.chosen].rollout_rounds,
                   sm.activation_time_s, sm.anchors ? "with" : "without", sensor_options.horizon_frames,
                   sm.validation_rms_m,
-                  sm.passive_rms_m, sm.constant_velocity_rms_m,
+                  sm.passive_rms_m, sm.constant_velocity_rms_m, sm.wall_time_s,
+                  sm.stopped_by_time ? " (stopped by --muscles-max-time-s: fewer candidates judged)" : "",
                   !sm.anchors ? ""
                   : sm.anchor_stiffness ? "; the anchor muscles with a stiffness of their own"
                                         : "; the anchor muscles without a stiffness of their own",

@@ -76,7 +76,9 @@ for bad in "--add-muscles 17|--add-muscles must be" "--muscle-hidden -1|--muscle
            "--sensor-muscles 17|--sensor-muscles must be" "--muscle-neighbours 65|--muscle-neighbours must be" \
            "--rollout-rounds 21|--rollout-rounds must be" "--muscle-anchors 2|--muscle-anchors must be" \
            "--anchor-stiffness yes|--anchor-stiffness must be" \
-           "--sensor-muscles 0 --muscle-neighbours 2|need sensor muscles (--sensor-muscles 0 turns them off)"; do
+           "--sensor-muscles 0 --muscle-neighbours 2|need sensor muscles (--sensor-muscles 0 turns them off)" \
+           "--sensor-muscles 6 --muscles-max-time-s -1|--muscles-max-time-s must be" \
+           "--muscles-max-time-s 60|--muscles-max-time-s needs sensor muscles"; do
   set +e
   "$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/x.yaml" \
     ${bad%%|*} 2>"$tmp/bad3.err" >/dev/null
@@ -126,6 +128,17 @@ grep -q "constant_velocity" "$tmp/sensor_eval.log" || { echo "evaluate:"; cat "$
 grep -q "^identify: sensor muscles: 6 sensors, 6 muscles, ridge" "$tmp/sensor0.log" ||
   { echo "--muscle-anchors 0:"; grep sensor "$tmp/sensor0.log"; exit 1; }
 ! grep -q "name: anchor_" "$tmp/sensor0.yaml"
+# A time limit on the muscles' fit (--muscles-max-time-s; spent at once here): one candidate
+# judged, the layout with anchors alone, the report says so, and a model is still written.
+"$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/sensor_t.yaml" \
+  --cost short_term --sensor-muscles 6 --muscle-neighbours 3 --muscles-max-time-s 1e-9 >"$tmp/sensor_t.log" 2>&1
+grep -q "^identify: sensor muscles: time limit of 1e-09 s spent (.* s): no further ridge" "$tmp/sensor_t.log" &&
+  grep -q "^identify: sensor muscles: time limit of 1e-09 s spent (.* s): no fit without anchors" "$tmp/sensor_t.log" &&
+  grep -q "^identify: sensor muscles: 6 sensors, .*, with anchors; .*(stopped by --muscles-max-time-s" "$tmp/sensor_t.log" ||
+  { echo "--muscles-max-time-s:"; grep sensor "$tmp/sensor_t.log"; exit 1; }
+[ "$(grep -c "^identify: sensor muscles: window 1, ridge" "$tmp/sensor_t.log")" -eq 1 ] ||
+  { echo "--muscles-max-time-s judged more than one ridge:"; grep sensor "$tmp/sensor_t.log"; exit 1; }
+[ -s "$tmp/sensor_t.yaml" ]
 # The default (auto): both layouts fitted, the one predicting the last 20 % better kept; the
 # report names it and the file has the anchors exactly when it says so.
 "$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/sensor_auto.yaml" \

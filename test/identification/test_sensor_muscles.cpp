@@ -525,6 +525,56 @@ TEST(SensorMuscles, TheWrittenModelStaysBoundedFromAnywhereInTheData) {
   }
 }
 
+TEST(SensorMuscles, ATimeLimitCutsTheSearchNotTheFit) {
+  // max_time_s spent at once: the first ridge alone is judged (one candidate always is), no
+  // rollout round, activation time constant or second layout is started, and the model is still
+  // built, checked and written as without a limit. A limit never reached changes nothing.
+  const LinearControllerCase setup;
+  const mme::Trajectory fitted = mme::sliceFrames(setup.data, 0, kFitted);
+  mme::SensorMuscleOptions o = smallOptions();
+  o.anchors_by_validation = true;
+  const mme::SensorMuscleResult full = mme::addSensorMuscles(setup.passive, fitted, o);
+  EXPECT_FALSE(full.stopped_by_time);
+  EXPECT_GT(full.wall_time_s, 0.0);
+  const size_t plain = o.windows_frames.size() * o.ridges.size();
+  ASSERT_GT(full.candidates.size(), plain);  // rounds were run
+  o.max_time_s = 1e9;
+  const mme::SensorMuscleResult roomy = mme::addSensorMuscles(setup.passive, fitted, o);
+  EXPECT_FALSE(roomy.stopped_by_time);
+  EXPECT_EQ(mme::modelToYaml(roomy.model), mme::modelToYaml(full.model));
+  std::vector<std::string> lines;
+  o.max_time_s = 1e-9;
+  o.progress = [&](const std::string& line) { lines.push_back(line); };
+  const mme::SensorMuscleResult cut = mme::addSensorMuscles(setup.passive, fitted, o);
+  EXPECT_TRUE(cut.stopped_by_time);
+  ASSERT_EQ(cut.candidates.size(), 1u);
+  EXPECT_EQ(cut.candidates[0].ridge, o.ridges[0]);
+  EXPECT_EQ(cut.candidates[0].rollout_rounds, 0);
+  EXPECT_EQ(cut.chosen, 0);
+  EXPECT_TRUE(cut.anchors);  // the layout fitted first; the one without anchors never started
+  EXPECT_EQ(cut.activation_time_s, 0.0);
+  EXPECT_EQ(mme::muscleTypeCount(cut.model), cut.muscles);
+  EXPECT_EQ(mme::freeParameters(cut.model).size(), mme::freeParameters(setup.passive).size());
+  const auto said = [&](const std::string& what) {
+    return std::any_of(lines.begin(), lines.end(),
+                       [&](const std::string& l) { return l.find(what) != std::string::npos; });
+  };
+  EXPECT_TRUE(said("time limit of 1e-09 s spent"));
+  EXPECT_TRUE(said("no further ridge"));
+  EXPECT_TRUE(said("no fit without anchors"));
+  EXPECT_EQ(std::count(lines.begin(), lines.end(), std::string("sensor muscles: without anchors")), 0);
+  // Kept or not by the same rule as without a limit: the first ridge's own figures.
+  if (cut.better_than_passive) {
+    EXPECT_LT(cut.validation_rms_m, cut.passive_rms_m);
+    EXPECT_TRUE(cut.candidates[0].bounded);
+  } else {
+    EXPECT_NE(cut.not_kept_because, "");
+  }
+  std::printf("time limit spent at once: 1 candidate (ridge %g, %.3g m held out in validation, "
+              "kept %d) against %zu (%.3g m) without\n", cut.ridge, cut.validation_rms_m,
+              cut.better_than_passive ? 1 : 0, full.candidates.size(), full.validation_rms_m);
+}
+
 TEST(SensorMuscles, TheWrittenModelMovesAsTheFittedOne) {
   const Model truth = mme::test::muscleObject();
   const mme::Trajectory data = mme::simulateTrajectory(truth, kFrames, truth.frame_rate_hz);
@@ -639,6 +689,11 @@ TEST(SensorMuscles, BadInputGetsClearErrors) {
     o = smallOptions();
     o.max_unknowns = bad;
     EXPECT_NE(message(passive, data, o).find("max_unknowns must be 1..14000"), std::string::npos) << bad;
+  }
+  for (double bad : {-1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    o = smallOptions();
+    o.max_time_s = bad;
+    EXPECT_NE(message(passive, data, o).find("time limit must be a finite number >= 0 s"), std::string::npos) << bad;
   }
   mme::Trajectory renamed = data;
   renamed.marker_names[1] = "elsewhere";

@@ -148,8 +148,11 @@ struct SensorMuscleOptions {
   /// (motion_capture_walk: 3 to 10 left the 10x rollout unbounded; subject01 34.11 against 34.24
   /// mm, Sample01 28.88 against 28.68 mm), so the default is 1 alone.
   std::vector<int> windows_frames = {1};
-  /// Candidate ridges, relative to the mean diagonal of the normal matrix (scaled columns).
-  std::vector<double> ridges = {1e-4, 1e-3, 1e-2, 1e-1, 0.3, 1.0, 3.0, 10.0};
+  /// Candidate ridges, relative to the mean diagonal of the normal matrix (scaled columns),
+  /// judged in this order: the largest first, whose fits stay near the data, so that a time
+  /// limit (max_time_s) that stops the search early leaves the steadier candidates judged (the
+  /// choice does not depend on the order: bounded first, then the lowest validation error).
+  std::vector<double> ridges = {10.0, 3.0, 1.0, 0.3, 1e-1, 1e-2, 1e-3, 1e-4};
   double validation_fraction = 0.2;  ///< last share of the frames that chooses the ridge
   int horizon_frames = 10;           ///< the validation's open-loop horizon
   /// Every muscle's own stiffness and damping >= 0 (a muscle is then a tether with a
@@ -182,6 +185,18 @@ struct SensorMuscleOptions {
   /// without); when even one sensor is too many, InputError (with anchors_by_validation, the
   /// other layout is kept).
   size_t max_unknowns = 14000;
+  /// Wall-time limit of the search [s] (0: none). On a capture of ~40 markers the fit takes
+  /// 10-25 minutes (two layouts of several thousand unknowns, 8 ridges, rounds of rollouts),
+  /// whatever bounded the passive identification before it. Checked between steps (a step under
+  /// way finishes: one solve of a large body takes tens of seconds): once spent, no further
+  /// ridge, rollout round, activation time constant or second layout is started (one candidate
+  /// is always judged), and the final refits run as without a limit: the best candidate judged
+  /// so far refitted on every frame and checked, and when it leaves the data the next ones (up
+  /// to 4 in all; a refit that leaves is common, and the next one is what gives a model). So
+  /// the fit overruns the limit by the step under way plus 1-4 refits (each about one
+  /// candidate's time). Its result then depends on the machine's load
+  /// (SensorMuscleResult::stopped_by_time says when it cut the search).
+  double max_time_s = 0.0;
   std::function<void(const std::string&)> progress;  ///< one line per step (may be empty)
 };
 
@@ -224,6 +239,10 @@ struct SensorMuscleResult {
   std::string not_kept_because;
   /// The final fit's residual per frame, a h^2 [m] (a window's row divided by window^2).
   double residual_rms_m = 0.0;
+  /// SensorMuscleOptions::max_time_s was spent before every step was run (the choice was made
+  /// among fewer candidates, or a layout was not fitted).
+  bool stopped_by_time = false;
+  double wall_time_s = 0.0;  ///< the fit's wall time [s]
 };
 
 /// How far the body travels over the data, in body sizes: the median over the free particles of
