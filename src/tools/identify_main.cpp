@@ -35,8 +35,9 @@ const char* kUsage =
     "                [--muscle-anchors auto|0|1] [--anchor-stiffness 1|0|auto]\n"
     "                [--muscles-max-time-s S]\n"
     "--max-time-s bounds each passive identification (each structure level's refit, the final fit),\n"
-    "--muscles-max-time-s the sensor muscles' fit after them (checked between its steps, so a\n"
-    "step under way finishes); 0, the default for both: no limit.\n";
+    "--muscles-max-time-s the sensor muscles' search after them (checked between its steps: a\n"
+    "step under way and the final refits still run; see the README); 0, the default for both:\n"
+    "no limit.\n";
 
 std::string formatMetres(double m) {
   char text[32];
