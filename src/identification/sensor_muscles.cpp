@@ -914,9 +914,9 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
     say(o, std::string("sensor muscles: without anchors: ") + e.what());
   }
   if (!with) return tagged(*without);
+  if (!without) return tagged(*with);
   with->stopped_by_time = with->stopped_by_time || without->stopped_by_time;
   without->stopped_by_time = with->stopped_by_time;
-  if (!without) return tagged(*with);
   const bool plain_better =
       (without->better_than_passive && !with->better_than_passive) ||
       (without->better_than_passive == with->better_than_passive &&
@@ -1055,15 +1055,16 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
   // equations can bound it): each round a candidate of its own.
   // Each runs from the one-step fit theta on data_rows; the ridge stays relative to those rows'
   // mean diagonal as rollout rows are added.
-  // `budgeted`: a round is not started once the time limit is spent (the candidates' rounds; the
-  // final refit runs its candidate's rounds all).
+  // `budgeted`: a round after the first is not started once the time limit is spent (the
+  // candidates' rounds, whose first the loop over their starts gates; the final refit runs its
+  // candidate's rounds all).
   auto runRounds = [&](const System& data_rows, double ridge, Eigen::VectorXd theta, int gain_t_end,
                        int start_end, int rounds, bool budgeted,
                        const std::function<void(int, const Eigen::VectorXd&, const Fitter::RolloutCount&)>& each) {
     const double reference_diagonal = Fitter::meanDiagonal(data_rows);
     System all = data_rows;
     for (int round = 1; round <= rounds; ++round) {
-      if (budgeted && stopsHere("further rollout round")) return true;
+      if (budgeted && round > 1 && stopsHere("further rollout round")) return true;
       const Fitter::RolloutCount count =
           fitter.accumulateRollouts(theta, o.gain_margin, gain_t_end, o.horizon_frames,
                                     o.rollout_stride_frames, o.rollout_correction_frames, 1, start_end, &all);
@@ -1101,7 +1102,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
         round_starts.push_back(lower[k]);
   }
   for (int index : round_starts) {
-    if (budget.spent()) break;  // runRounds says so
+    if (stopsHere("further rollout rounds")) break;
     const SensorMuscleCandidate start = result.candidates[index];
     runRounds(best_sys, start.ridge, thetas[index], validation_start,
               validation_start - o.horizon_frames - 1, o.rollout_rounds, true,
