@@ -736,7 +736,8 @@ void say(const SensorMuscleOptions& o, const std::string& line) {
   if (o.progress) o.progress(line);
 }
 
-/// SensorMuscleOptions::max_time_s, counted from the start of addSensorMuscles.
+/// SensorMuscleOptions::max_time_s, counted from the start of addSensorMuscles; it remembers
+/// whether it stopped a step (SensorMuscleResult::stopped_by_time).
 class Budget {
  public:
   explicit Budget(double max_time_s) : max_time_s_(max_time_s), start_(std::chrono::steady_clock::now()) {}
@@ -745,23 +746,26 @@ class Budget {
   }
   bool spent() const { return max_time_s_ > 0.0 && elapsedS() >= max_time_s_; }
   /// spent(), and when so a progress line saying what is not started (`what`).
-  bool stops(const SensorMuscleOptions& o, const std::string& what) const {
+  bool stops(const SensorMuscleOptions& o, const std::string& what) {
     if (!spent()) return false;
+    stopped_ = true;
     char line[240];
     std::snprintf(line, sizeof(line), "sensor muscles: time limit of %g s spent (%.1f s): no %s",
                   max_time_s_, elapsedS(), what.c_str());
     say(o, line);
     return true;
   }
+  bool stopped() const { return stopped_; }  ///< stops() has stopped a step
 
  private:
   double max_time_s_;
   std::chrono::steady_clock::time_point start_;
+  bool stopped_ = false;
 };
 
 SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data,
                                     const std::vector<char>& anchor, const SensorMuscleOptions& o,
-                                    const Budget& budget);
+                                    Budget& budget);
 
 }  // namespace
 
@@ -853,9 +857,10 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
       throw InputError("sensor muscles: the passive model's '" + ref.name + "' has no value (identify it first)");
   if (!(o.travel_body_sizes > 0.0) || !std::isfinite(o.travel_body_sizes))
     throw InputError("sensor muscles: travel_body_sizes must be a finite number > 0");
-  const Budget budget(o.max_time_s);
+  Budget budget(o.max_time_s);
   const auto timed = [&](SensorMuscleResult r) {
     r.wall_time_s = budget.elapsedS();
+    r.stopped_by_time = budget.stopped();
     return r;
   };
   if (!o.anchors) return timed(fitSensorMuscles(passive, data, std::vector<char>(n, 0), o, budget));
@@ -902,10 +907,7 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   } catch (const InputError& e) {
     say(o, std::string("sensor muscles: with anchors: ") + e.what());
   }
-  if (with && budget.stops(o, "fit without anchors (the fit with them is kept)")) {
-    with->stopped_by_time = true;
-    return tagged(*with);
-  }
+  if (with && budget.stops(o, "fit without anchors (the fit with them is kept)")) return tagged(*with);
   say(o, "sensor muscles: without anchors");
   try {
     without = fitSensorMuscles(passive, data, std::vector<char>(n, 0), resolved, budget);
@@ -915,8 +917,6 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   }
   if (!with) return tagged(*without);
   if (!without) return tagged(*with);
-  with->stopped_by_time = with->stopped_by_time || without->stopped_by_time;
-  without->stopped_by_time = with->stopped_by_time;
   const bool plain_better =
       (without->better_than_passive && !with->better_than_passive) ||
       (without->better_than_passive == with->better_than_passive &&
@@ -935,7 +935,7 @@ namespace {
 /// addSensorMuscles on a checked model and data (anchors added when asked).
 SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data,
                                     const std::vector<char>& anchor, const SensorMuscleOptions& o,
-                                    const Budget& budget) {
+                                    Budget& budget) {
   const int frames = data.numFrames();
   const int validation_start = static_cast<int>(std::floor((1.0 - o.validation_fraction) * frames));
   if (validation_start < 4 || frames - validation_start < o.horizon_frames + 1)
@@ -1000,20 +1000,15 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
   // With a time limit (Budget): once spent, no further candidate after the first that gave a
   // model, no rollout round and no activation time constant; the final refits below are not cut
   // (a refit that leaves the data is common, and the next candidate's is what gives a model).
-  const auto stopsHere = [&](const std::string& what) {
-    if (!budget.stops(o, what)) return false;
-    result.stopped_by_time = true;
-    return true;
-  };
   for (int window : o.windows_frames) {
-    if (best >= 0 && stopsHere("further window")) break;
+    if (best >= 0 && budget.stops(o, "further window")) break;
     System sys;
     fitter.accumulate(window, 0, validation_start - window, &sys);
     if (sys.rows == 0) continue;
     any_rows = true;
     const int window_first = static_cast<int>(result.candidates.size());
     for (double ridge : o.ridges) {
-      if (best >= 0 && stopsHere("further ridge")) break;
+      if (best >= 0 && budget.stops(o, "further ridge")) break;
       SensorMuscleCandidate c;
       c.window_frames = window;
       c.ridge = ridge;
@@ -1064,7 +1059,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
     const double reference_diagonal = Fitter::meanDiagonal(data_rows);
     System all = data_rows;
     for (int round = 1; round <= rounds; ++round) {
-      if (budgeted && round > 1 && stopsHere("further rollout round")) return true;
+      if (budgeted && round > 1 && budget.stops(o, "further rollout round")) return true;
       const Fitter::RolloutCount count =
           fitter.accumulateRollouts(theta, o.gain_margin, gain_t_end, o.horizon_frames,
                                     o.rollout_stride_frames, o.rollout_correction_frames, 1, start_end, &all);
@@ -1102,7 +1097,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
         round_starts.push_back(lower[k]);
   }
   for (int index : round_starts) {
-    if (stopsHere("further rollout rounds")) break;
+    if (budget.stops(o, "further rollout rounds")) break;
     const SensorMuscleCandidate start = result.candidates[index];
     runRounds(best_sys, start.ridge, thetas[index], validation_start,
               validation_start - o.horizon_frames - 1, o.rollout_rounds, true,
@@ -1163,7 +1158,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
     if (thetas[index].size() == 0) return chosen;
     for (double tau_frames : o.activation_times_frames) {
       if (!(tau_frames > 0.0)) continue;
-      if (stopsHere("further activation time constant")) break;
+      if (budget.stops(o, "further activation time constant")) break;
       double rms = std::nan("");
       bool bounded = false;
       try {
@@ -1199,9 +1194,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
   bool final_bounded = false;
   int accepted = best;
   Activation activation, first_activation;
-  size_t refits_tried = 0;
   for (int index : order) {
-    ++refits_tried;
     const SensorMuscleCandidate& c = result.candidates[index];
     Eigen::VectorXd t;
     if (!fitter.solve(sys, c.ridge, &t)) continue;
@@ -1262,7 +1255,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
     std::snprintf(why, sizeof(why), "no candidate's 10x validation rollout stayed bounded");
   else if (!final_bounded)
     std::snprintf(why, sizeof(why), "every refit on all frames tried (%zu) left the data over its "
-                  "10x rollouts", refits_tried);
+                  "10x rollouts", order.size());
   else if (!better)
     std::snprintf(why, sizeof(why), "its validation error %.3g m is not below the passive model's "
                   "%.3g m by %.3g m, 1 %% of the larger of it and the constant-velocity guess's",
