@@ -4,6 +4,7 @@
 // The normal equations are accumulated term by term (a row touches only the unknowns of the bonds
 // at its particle) and solved with column scaling.
 #include "motion_model_estimation/identification/equation_error.h"
+#include "motion_model_estimation/identification/normal_equations.h"
 
 #include <Eigen/Dense>
 
@@ -410,15 +411,16 @@ EquationErrorResult solveEquationError(const Model& model, const Trajectory& tra
   const Eigen::VectorXd& atb = system.atb;
   const double btb = system.btb;
   const size_t nc = system.column_param.size();
-  // Column scaling, then a rank-revealing solve: a column no row touches stays undetermined.
-  Eigen::VectorXd scale(nc);
-  for (size_t j = 0; j < nc; ++j) scale[j] = ata(j, j) > 0.0 ? 1.0 / std::sqrt(ata(j, j)) : 0.0;
-  const Eigen::MatrixXd scaled = scale.asDiagonal() * ata * scale.asDiagonal();
-  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(scaled);
-  cod.setThreshold(1e-12);
-  const Eigen::VectorXd theta = scale.asDiagonal() * cod.solve(scale.asDiagonal() * atb);
-  const double residual2 = std::max(0.0, btb - 2.0 * theta.dot(atb) + theta.dot(ata * theta));
-  out.residual_rms_m = std::sqrt(residual2 / out.rows);
+  // A column no row touches stays undetermined (normal_equations.h holds it at 0).
+  const NormalEquationsSolution solved = solveNormalEquations(ata, atb, btb);
+  if (!solved.trusted) {
+    out.reason = "the equation error's " + std::to_string(nc) +
+                 " unknowns could not be solved reliably (not finite, or the residual stayed above "
+                 "the right-hand side at every ridge)";
+    return out;
+  }
+  const Eigen::VectorXd& theta = solved.theta;
+  out.residual_rms_m = std::sqrt(solved.rss / out.rows);
   for (size_t j = 0; j < nc; ++j) {
     if (!(ata(j, j) > 0.0)) continue;
     double value = theta[j] + system.column_offset[j];

@@ -16,6 +16,7 @@
 #include "motion_model_estimation/core/forces.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/equation_error.h"
+#include "motion_model_estimation/identification/normal_equations.h"
 #include "motion_model_estimation/identification/prediction_error.h"
 
 namespace mme {
@@ -216,34 +217,19 @@ void addCandidateViscosities(Model* model) {
   }
 }
 
-/// Solves the columns in `active` of the normal equations (scaled, rank-revealing); the others 0.
-Eigen::VectorXd solveActive(const EquationErrorSystem& sys, const std::vector<int>& active,
-                            Eigen::MatrixXd* inverse_scaled, Eigen::VectorXd* scale_out) {
-  const int m = static_cast<int>(active.size());
-  Eigen::MatrixXd a(m, m);
-  Eigen::VectorXd b(m), scale(m);
-  // Columns next to nothing (1e-30 of the largest) count as absent: their scaling would
-  // overflow the products below.
-  double largest = 0.0;
-  for (int i = 0; i < m; ++i) largest = std::max(largest, sys.ata(active[i], active[i]));
-  for (int i = 0; i < m; ++i) {
-    const double d = sys.ata(active[i], active[i]);
-    scale[i] = d > 1e-30 * largest ? 1.0 / std::sqrt(d) : 0.0;
-  }
-  for (int i = 0; i < m; ++i) {
-    b[i] = scale[i] * sys.atb[active[i]];
-    for (int j = 0; j < m; ++j) a(i, j) = scale[i] * sys.ata(active[i], active[j]) * scale[j];
-  }
-  if (!a.allFinite() || !b.allFinite())
-    throw InputError("structure selection: the equation error's normal equations are not finite");
-  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(a);
-  cod.setThreshold(1e-12);
-  Eigen::VectorXd theta = scale.asDiagonal() * cod.solve(b);
-  if (inverse_scaled) *inverse_scaled = cod.pseudoInverse();
-  if (scale_out) *scale_out = scale;
-  Eigen::VectorXd full = Eigen::VectorXd::Zero(sys.atb.size());
-  for (int i = 0; i < m; ++i) full[active[i]] = theta[i];
-  return full;
+/// Solves the columns in `active` of the normal equations (normal_equations.h); the others 0.
+/// Throws InputError naming `who` when the system is not finite or no solve can be trusted.
+NormalEquationsSolution solveActive(const EquationErrorSystem& sys, const std::vector<int>& active,
+                                    bool want_inverse, const std::string& who) {
+  if (!sys.ata.allFinite() || !sys.atb.allFinite() || !std::isfinite(sys.btb))
+    throw InputError("structure selection: " + who + ": the equation error's normal equations are not finite");
+  NormalEquationsSolution s = solveNormalEquations(sys.ata, sys.atb, sys.btb, active, want_inverse);
+  if (!s.trusted)
+    throw InputError("structure selection: " + who + ": the equation error's " +
+                     std::to_string(active.size()) + " unknowns could not be solved reliably (the "
+                     "residual stayed above the right-hand side at every ridge); the window's "
+                     "markers may be too few or too still for this many candidates");
+  return s;
 }
 
 double rss(const EquationErrorSystem& sys, const Eigen::VectorXd& theta) {
@@ -283,7 +269,7 @@ std::vector<int> activeColumns(const std::vector<Group>& groups, const std::vect
 /// goes (theta_K -= inv_KR inv_RR^-1 theta_R, inv_KK -= inv_KR inv_RR^-1 inv_RK); it is
 /// recomputed from scratch every 25 removals against drift.
 Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
-                    const std::vector<int>& always, double sigma2,
+                    const std::vector<int>& always, double sigma2, const std::string& who,
                     const std::function<void(const std::string&)>& progress) {
   const double price_per_param = sigma2 * std::log(static_cast<double>(std::max<size_t>(sys.rows, 2)));
   int removed = 0, since_solve = 0;
@@ -293,7 +279,10 @@ Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
   std::map<int, int> position;
   const auto resolve = [&]() {
     cols = activeColumns(groups, always);
-    const Eigen::VectorXd full = solveActive(sys, cols, &inv, &scale);
+    NormalEquationsSolution solved = solveActive(sys, cols, true, who);
+    const Eigen::VectorXd& full = solved.theta;
+    inv = std::move(solved.inverse_scaled);
+    scale = std::move(solved.scale);
     theta_s.resize(cols.size());
     position.clear();
     for (size_t i = 0; i < cols.size(); ++i) {
@@ -909,13 +898,16 @@ void convergeLinearized(Model* model, const Trajectory& fit, const EquationError
   Model before_step = *model;
   for (int iteration = 0; iteration < 30; ++iteration) {
     const EquationErrorSystem sys = buildEquationErrorSystem(*model, fit, ee);
-    const bool finite = sys.reason.empty() && sys.ata.allFinite() && sys.atb.allFinite();
+    const bool finite = sys.reason.empty() && sys.ata.allFinite() && sys.atb.allFinite() &&
+                        std::isfinite(sys.btb);
     std::vector<int> all;
     for (size_t j = 0; finite && j < sys.column_param.size(); ++j)
       if (sys.ata(j, j) > 0.0) all.push_back(static_cast<int>(j));
-    const Eigen::VectorXd theta = finite ? solveActive(sys, all, nullptr, nullptr) : Eigen::VectorXd();
-    const double r = finite ? rss(sys, theta) : kNan;
-    if (!finite || !theta.allFinite() || !(r < best_rss * (1.0 - 1e-6))) {
+    NormalEquationsSolution solved;
+    if (finite) solved = solveNormalEquations(sys.ata, sys.atb, sys.btb, all);
+    const Eigen::VectorXd& theta = solved.theta;
+    const double r = solved.trusted ? solved.rss : kNan;
+    if (!solved.trusted || !(r < best_rss * (1.0 - 1e-6))) {
       // No progress from this point: back to the one it was reached from (iteration 0: the start).
       if (iteration > 0) *model = before_step;
       return;
@@ -1169,7 +1161,8 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
           if (!(sys.ata(c, c) > 0.0)) g.active = false;
       // The noise level of the full candidate model's residual, floored at round-off.
       std::vector<int> all = activeColumns(groups, always);
-      const Eigen::VectorXd theta_all = solveActive(sys, all, nullptr, nullptr);
+      const NormalEquationsSolution solved_all = solveActive(sys, all, false, cand.name);
+      const Eigen::VectorXd& theta_all = solved_all.theta;
       const double rms_b = std::sqrt(sys.btb / std::max<size_t>(sys.rows, 1));
       // Round-off of the equation error (conditioning included) on exact data: 1e-6 of the rows' RMS,
       // 1e-10 m at least: no capture resolves a tenth of a nanometre, and a small motion's
@@ -1184,7 +1177,7 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
                       sys.rows, std::sqrt(rss(sys, theta_all) / std::max<size_t>(sys.rows, 1)), rms_b);
         say(line);
       }
-      Selection sel = eliminate(sys, groups, always, sigma2, options.progress);
+      Selection sel = eliminate(sys, groups, always, sigma2, cand.name, options.progress);
       Solved solved = describe(full, sys, sel, sigma2, first_candidate_type, dampers);
       // Bonds the neighbourhoods missed (long ones): pairs the residual asks for become
       // candidates too, and the selection runs again (at most 4 rounds of 20). Before the
