@@ -316,11 +316,13 @@ bool OnlineEstimator::update() {
   const auto deadline = began + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                     std::chrono::duration<double>(options_.update_budget_s));
   for (int g = 0; g < options_.generations_per_update; ++g) {
+    if (modelChangedSince(version)) return false;  // stale: the next update starts afresh
     const auto before = std::chrono::steady_clock::now();
     es_->step();
     const auto after = std::chrono::steady_clock::now();
     if (after + (after - before) > deadline) break;
   }
+  if (modelChangedSince(version)) return false;
   const EsOptions& es_options = options_.es;
   if (!refinement_ && es_options.refine_period > 0 &&
       es_->generation() >= es_options.refine_start_generation &&
@@ -407,6 +409,11 @@ bool OnlineEstimator::update() {
   std::lock_guard<std::mutex> estimate_lock(estimate_mutex_);
   estimate_ = std::move(e);
   return true;
+}
+
+bool OnlineEstimator::modelChangedSince(uint64_t version) const {
+  std::lock_guard<std::mutex> lock(model_mutex_);
+  return model_version_ != version;
 }
 
 Estimate OnlineEstimator::estimate() const {

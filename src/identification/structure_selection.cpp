@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -28,6 +29,27 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kRoundOffFloorM = 1e-10;  ///< an equation-error residual below this is exact
 constexpr int kHorizons[3] = {1, 5, 10};
 constexpr int kMaxPasses = 12;  ///< solves per level (non-physical drops, screening rounds)
+
+/// The selection's wall-time limit (StructureOptions::max_wall_time_s; 0 = none), read between
+/// steps: a step under way (one solve, one refit bounded by what is left) still ends.
+class Deadline {
+ public:
+  explicit Deadline(double max_s) : max_s_(max_s), start_(std::chrono::steady_clock::now()) {}
+  double elapsedS() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+  bool limited() const { return max_s_ > 0.0; }
+  bool passed() const { return limited() && elapsedS() >= max_s_; }
+  /// [s] left; infinite without a limit.
+  double remainingS() const {
+    return limited() ? std::max(0.0, max_s_ - elapsedS()) : std::numeric_limits<double>::infinity();
+  }
+  double maxS() const { return max_s_; }
+
+ private:
+  double max_s_;
+  std::chrono::steady_clock::time_point start_;
+};
 
 /// Mean and relative spread of a pair's distance over the frames where both are seen.
 struct PairStats {
@@ -254,6 +276,7 @@ struct Selection {
   std::vector<int> active_columns;
   Eigen::MatrixXd inverse_scaled;  ///< the final solve's scaled (pseudo-)inverse
   Eigen::VectorXd scale;           ///< its column scaling
+  bool cut = false;                ///< the time limit stopped the elimination early
 };
 
 std::vector<int> activeColumns(const std::vector<Group>& groups, const std::vector<int>& always) {
@@ -267,9 +290,12 @@ std::vector<int> activeColumns(const std::vector<Group>& groups, const std::vect
 /// Grouped backward elimination with the BIC's price per parameter, sigma2 * ln(N). The solve
 /// is kept as the (scaled) inverse of the active normal equations and downdated when a unit
 /// goes (theta_K -= inv_KR inv_RR^-1 theta_R, inv_KK -= inv_KR inv_RR^-1 inv_RK); it is
-/// recomputed from scratch every 25 removals against drift.
+/// recomputed from scratch every 25 removals against drift. The time limit stops the removals;
+/// the selection so far is then solved again unless `finish_when_cut` is false (the caller gives
+/// the level up and reads only `cut`).
 Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
                     const std::vector<int>& always, double sigma2, const std::string& who,
+                    const Deadline& deadline, bool finish_when_cut,
                     const std::function<void(const std::string&)>& progress) {
   const double price_per_param = sigma2 * std::log(static_cast<double>(std::max<size_t>(sys.rows, 2)));
   int removed = 0, since_solve = 0;
@@ -348,7 +374,12 @@ Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
     ++since_solve;
   };
   resolve();
+  bool cut = false;
   for (;;) {
+    if (deadline.passed()) {
+      cut = true;
+      break;
+    }
     if (since_solve >= 25) resolve();
     // The cheapest unit to remove, and every unit far below its price.
     double best_ratio = std::numeric_limits<double>::infinity();
@@ -388,8 +419,12 @@ Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
     drop(r);
     removed += static_cast<int>(batch.size());
   }
-  resolve();  // the final solve from scratch
   Selection s;
+  if (cut && !finish_when_cut) {  // the caller gives the level up: no final solve
+    s.cut = true;
+    return s;
+  }
+  resolve();  // the final solve from scratch
   s.groups = std::move(groups);
   s.theta = Eigen::VectorXd::Zero(sys.atb.size());
   for (size_t i = 0; i < cols.size(); ++i) s.theta[cols[i]] = scale[i] * theta_s[i];
@@ -398,8 +433,10 @@ Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
   s.active_columns = cols;
   s.inverse_scaled = inv;
   s.scale = scale;
+  s.cut = cut;
   if (progress) progress("  elimination: " + std::to_string(removed) + " unit(s) removed, " +
-                         std::to_string(cols.size()) + " unknowns left");
+                         std::to_string(cols.size()) + " unknowns left" +
+                         (cut ? " (cut by the time limit)" : ""));
   return s;
 }
 
@@ -547,6 +584,52 @@ Solved describe(const Model& candidate, const EquationErrorSystem& sys, const Se
     }
   out.model = std::move(pruned);
   return out;
+}
+
+/// Drops the kept bonds whose values came out non-physical and the non-physical optional terms
+/// from `solved`, without solving again: the last pass, or one cut by the time limit, must not
+/// hand on a negative stiffness. Returns whether anything was dropped.
+bool dropNonPhysical(Solved* solved, int first_candidate_type) {
+  if (solved->bad_bonds.empty() && solved->bad_terms.empty()) return false;
+  const std::set<int> bad(solved->bad_bonds.begin(), solved->bad_bonds.end());
+  Model& m = solved->model;
+  Solved kept;
+  kept.model = m;
+  kept.model.bond_types.resize(first_candidate_type);
+  kept.model.bonds.clear();
+  std::vector<int> new_type(m.bond_types.size(), -1);
+  for (int t = 0; t < first_candidate_type; ++t) new_type[t] = t;
+  for (size_t i = 0; i < solved->kept_types.size(); ++i) {
+    const int candidate_type = solved->kept_types[i];
+    if (bad.count(candidate_type)) continue;
+    BondType type = m.bond_types[first_candidate_type + i];
+    BondValues value = solved->value[i];
+    uint8_t terms = solved->terms[i];
+    const ParamId optional[3] = {kDamping, kStiffnessNl, kDampingNl};
+    for (const auto& term : solved->bad_terms) {
+      if (term.first != candidate_type) continue;
+      for (int o = 0; o < 3; ++o)
+        if (optional[o] == term.second) {
+          type.param(optional[o]) = Param();
+          terms &= static_cast<uint8_t>(~(1u << o));
+          value[2 + o] = 0.0;
+        }
+    }
+    new_type[first_candidate_type + i] = static_cast<int>(kept.model.bond_types.size());
+    kept.model.bond_types.push_back(type);
+    kept.kept_types.push_back(candidate_type);
+    kept.value.push_back(value);
+    kept.sigma.push_back(solved->sigma[i]);
+    kept.terms.push_back(terms);
+  }
+  for (const Bond& b : m.bonds)
+    if (new_type[b.type] >= 0) {
+      Bond nb = b;
+      nb.type = new_type[b.type];
+      kept.model.bonds.push_back(nb);
+    }
+  *solved = std::move(kept);
+  return true;
 }
 
 /// Bonds of one kind whose values (k, L, c; k, theta0, c; c_v) agree within `sigmas` standard
@@ -956,6 +1039,7 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
   const auto say = [&](const std::string& line) {
     if (options.progress) options.progress(line);
   };
+  const Deadline deadline(options.max_wall_time_s);
   if (!model.interactions.empty())
     throw InputError("structure selection: the model has interactions (bonds found on the fly); "
                      "give the particles and fixed bonds only");
@@ -1041,11 +1125,17 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       for (ParamId id : {kMinDistance, kMaxDistance})
         if (conditional && type.param(id).present) type.param(id).free = true;
     }
-    if (options.refit) {
+    if (options.refit && deadline.passed()) {
+      say("structure: " + cand->name + ": not refitted (the time limit is spent); judged with the "
+          "equation error's values");
+    } else if (options.refit) {
       IdentifyOptions io = options.identify;
       io.cost = CostChoice::kShortTerm;  // ranking only: the final fit is the caller's
       io.generations = std::min(io.generations, options.refit_generations);
       io.estimate_std = false;
+      if (deadline.limited())  // what is left of the selection's limit bounds the refit too
+        io.max_wall_time_s = io.max_wall_time_s > 0.0 ? std::min(io.max_wall_time_s, deadline.remainingS())
+                                                      : std::max(deadline.remainingS(), 1e-3);
       const IdentifyResult r = identifyModel(cand->model, fit, io);
       cand->model = r.model;
       cand->refit_cost_m2 = r.global_cost;
@@ -1072,8 +1162,23 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
   std::vector<double> base_sigma2;      // per level: its noise level (the criterion's sigma^2)
   std::vector<size_t> base_rows;        // ... and its equations
   const size_t cumulative_levels = levels.size();
+  // Once the time limit is spent, no further level starts; a level under way is given up
+  // unless it is the first (which ends on its elimination so far: something to choose).
+  const auto stopByTime = [&](const std::string& where) {
+    result.stopped_by_time = true;
+    char line[200];
+    std::snprintf(line, sizeof(line), "the time limit (%.3g s) stopped the selection %s after %zu "
+                  "level(s) (%.1f s): the best level judged so far is chosen",
+                  deadline.maxS(), where.c_str(), candidates.size(), deadline.elapsedS());
+    say(std::string("structure: ") + line);
+    result.notes.push_back(line);
+  };
   for (size_t level_index = 0; level_index < levels.size(); ++level_index) {
     const Level level = levels[level_index];
+    if (!candidates.empty() && deadline.passed()) {
+      stopByTime("before " + level.name);
+      break;
+    }
     const bool dampers = level.dampers;
     const bool nonlinear = level.nonlinear_on >= 0;
     const bool conditional = level.conditional_on >= 0;
@@ -1110,7 +1215,12 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
     std::string signature;
     std::vector<Group> groups;
     int screening_rounds = 0;
+    bool given_up = false;  // the time limit ran out during this level (not the first)
     for (int pass = 0; pass < kMaxPasses; ++pass) {
+      if (!candidates.empty() && deadline.passed()) {
+        given_up = true;
+        break;
+      }
       if (nonlinear) convergeLinearized(&full, fit, level_ee);
       const EquationErrorSystem sys = buildEquationErrorSystem(full, fit, level_ee);
       if (!sys.reason.empty())
@@ -1177,12 +1287,22 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
                       sys.rows, std::sqrt(rss(sys, theta_all) / std::max<size_t>(sys.rows, 1)), rms_b);
         say(line);
       }
-      Selection sel = eliminate(sys, groups, always, sigma2, cand.name, options.progress);
+      Selection sel = eliminate(sys, groups, always, sigma2, cand.name, deadline, candidates.empty(),
+                                options.progress);
+      if (sel.cut && !candidates.empty()) {
+        given_up = true;
+        break;
+      }
       Solved solved = describe(full, sys, sel, sigma2, first_candidate_type, dampers);
+      const bool out_of_time = deadline.passed();
+      if (out_of_time && !candidates.empty()) {
+        given_up = true;
+        break;
+      }
       // Bonds the neighbourhoods missed (long ones): pairs the residual asks for become
       // candidates too, and the selection runs again (at most 4 rounds of 20). Before the
       // non-physical drops: a missing bond makes true ones come out wrong.
-      if (!nonlinear && !conditional && screening_rounds < 4 && pass + 1 < kMaxPasses) {
+      if (!nonlinear && !conditional && screening_rounds < 4 && pass + 1 < kMaxPasses && !out_of_time) {
         std::set<std::pair<int, int>> have;
         for (const Bond& b : full.bonds)
           if (kindArity(full.bond_types[b.type].kind) == 2) have.insert(std::minmax(b.particles[0], b.particles[1]));
@@ -1198,7 +1318,7 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
           continue;
         }
       }
-      if ((!solved.bad_bonds.empty() || !solved.bad_terms.empty()) && pass + 1 < kMaxPasses) {
+      if ((!solved.bad_bonds.empty() || !solved.bad_terms.empty()) && pass + 1 < kMaxPasses && !out_of_time) {
         // Kept bonds that came out non-physical lose their spring (the bond goes) or their
         // damper; then the system is solved again. A type without a bond keeps no free value.
         std::set<int> bad(solved.bad_bonds.begin(), solved.bad_bonds.end());
@@ -1217,9 +1337,16 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
             " damping term(s) dropped; solving again");
         continue;
       }
-      if (!solved.bad_bonds.empty() || !solved.bad_terms.empty())
-        result.notes.push_back(cand.name + ": non-physical values remained after " +
-                               std::to_string(kMaxPasses) + " passes");
+      if (!solved.bad_bonds.empty() || !solved.bad_terms.empty()) {
+        const std::string why = out_of_time ? "the time limit cut this level" :
+                                              "they remained after " + std::to_string(kMaxPasses) + " passes";
+        const std::string line = cand.name + ": " + std::to_string(solved.bad_bonds.size()) +
+                                 " non-physical bond(s) and " + std::to_string(solved.bad_terms.size()) +
+                                 " damping term(s) dropped without solving again (" + why + ")";
+        say("structure: " + line);
+        result.notes.push_back(line);
+        dropNonPhysical(&solved, first_candidate_type);
+      }
       // Types: one per bond, or shared where the values agree; the criterion decides.
       const double untyped_bic = bic(sel.rss_m2, sys.rows, sel.parameters, floor2);
       int types = 0;
@@ -1301,6 +1428,10 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       kept_untyped = solved.model;
       level_sigma2 = sigma2;
       level_rows = sys.rows;
+      break;
+    }
+    if (given_up) {
+      stopByTime("during " + cand.name);
       break;
     }
     untyped.push_back(kept_untyped);

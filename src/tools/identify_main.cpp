@@ -34,7 +34,8 @@ const char* kUsage =
     "                [--sensor-muscles SENSORS] [--muscle-neighbours K] [--rollout-rounds R]\n"
     "                [--muscle-anchors auto|0|1] [--anchor-stiffness 1|0|auto]\n"
     "                [--muscles-max-time-s S]\n"
-    "--max-time-s bounds each passive identification (each structure level's refit, the final fit),\n"
+    "--max-time-s bounds the structure selection (all its levels together: a cut selection\n"
+    "chooses the best level judged so far) and then the passive identification,\n"
     "--muscles-max-time-s the sensor muscles' search after them (checked between its steps: a\n"
     "step under way and the final refits still run; see the README); 0, the default for both:\n"
     "no limit.\n";
@@ -190,6 +191,7 @@ int run(int argc, char** argv) {
                             "selected bonds are not the file's)");
     mme::StructureOptions so;
     so.identify = options;
+    so.max_wall_time_s = options.max_wall_time_s;
     so.progress = [&](const std::string& line) {
       if (!quiet) std::printf("%s\n", line.c_str());
       std::fflush(stdout);

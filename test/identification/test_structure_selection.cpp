@@ -233,3 +233,43 @@ TEST(StructureSelection, ATypeNonPhysicalInTheTypedFitIsHeldAndTheTypingKept) {
 }
 
 }  // namespace
+
+// The time limit: spent from the start, the selection still ends on its first level (its
+// elimination so far, no refit, nothing non-physical kept), says so, and chooses it; with room
+// to spare it changes nothing.
+TEST(StructureSelection, ATimeLimitCutsTheSelectionAfterTheFirstLevel) {
+  mme::RandomObjectSpec spec;
+  spec.particles = 12;
+  spec.bond_types = 4;
+  spec.bonds = 24;
+  spec.damping_max_nspm = 0.5;
+  spec.seed = 5;
+  const mme::Model truth = mme::makeRandomObject(spec);
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 160, truth.frame_rate_hz);
+  mme::StructureOptions options;
+  options.identify.es.threads = 1;
+  options.identify.generations = 100;
+  options.max_wall_time_s = 1e-9;
+  const mme::StructureResult cut = mme::selectStructure(particlesOnly(truth), data, options);
+  SCOPED_TRACE(mme::formatStructureReport(cut));
+  EXPECT_TRUE(cut.stopped_by_time);
+  ASSERT_EQ(cut.candidates.size(), 1u);
+  EXPECT_EQ(cut.candidates[0].name, "springs");
+  EXPECT_TRUE(cut.candidates[0].chosen);
+  EXPECT_EQ(cut.candidates[0].refit_cost_m2, -1.0) << "no time for a refit";
+  bool noted = false;
+  for (const std::string& n : cut.notes) noted = noted || n.find("time limit") != std::string::npos;
+  EXPECT_TRUE(noted);
+  EXPECT_FALSE(cut.model.bonds.empty());
+  for (const mme::BondType& t : cut.model.bond_types) {
+    EXPECT_GT(t.value(mme::kStiffness), 0.0) << t.name;
+    EXPECT_GT(t.value(mme::kRestLength), 0.0) << t.name;
+  }
+
+  options.max_wall_time_s = 1e6;
+  const mme::StructureResult roomy = mme::selectStructure(particlesOnly(truth), data, options);
+  options.max_wall_time_s = 0.0;
+  const mme::StructureResult unlimited = mme::selectStructure(particlesOnly(truth), data, options);
+  EXPECT_FALSE(roomy.stopped_by_time);
+  EXPECT_EQ(mme::structureReportCsv(roomy), mme::structureReportCsv(unlimited));
+}

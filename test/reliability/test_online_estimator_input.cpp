@@ -5,9 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
-#include <thread>
 #include <limits>
+#include <string>
+#include <thread>
+#include <vector>
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
@@ -117,39 +120,72 @@ TEST_F(Fixture, ClockJumpStartsANewWindowAndKeepsTheModel) {
 
 }  // namespace
 
-// The node's services and marker building read the model while a worker thread runs update()
-// back to back. They must not queue on the lock update() holds: std::mutex is not fair, so such
-// a reader starved for many seconds (the services rostest timed out that way). The readers use
-// the whole of each update's time for nothing but copies: 200 of them finish while the worker
-// has done only a few updates, and a reset or a model replacement takes effect at once.
+// The node's services and marker building read the model while a worker thread runs update().
+// They must not queue on the lock update() holds (std::mutex is not fair: such a reader starved
+// for many seconds). Here one update is made to run for up to a minute; 200 reads finish while
+// it is still running, and a reset() stops it at its next generation without committing
+// anything. The verdicts do not depend on the machine's speed: only a reader blocked for the
+// whole update, or an update that commits a stale result, fails them.
 TEST_F(Fixture, ReadersAndResetsNeverWaitForARunningUpdate) {
   mme::OnlineEstimatorOptions o = options();
-  o.generations_per_update = 200;  // long updates: a reader queued behind one would wait long
+  o.generations_per_update = 100000000;  // ends on the budget (or on reset)
+  o.update_budget_s = 60.0;
   mme::OnlineEstimator e(model, o);
   for (int t = 0; t < 50; ++t) ASSERT_EQ(e.addFrame(0.01 * t, frame(t), {}), "");
-  ASSERT_TRUE(e.update());  // one update, so later ones re-evaluate a living population
-  std::atomic<bool> stop{false};
-  std::atomic<int> updates{0};
+  std::atomic<bool> started{false}, finished{false};
+  bool committed = true;
   std::thread worker([&] {
-    while (!stop) if (e.update()) ++updates;
+    started = true;
+    committed = e.update();
+    finished = true;
   });
-  while (updates == 0) std::this_thread::yield();  // the worker is in its loop
-  const int updates_before = updates;
+  while (!started) std::this_thread::yield();
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));  // well inside its generations
   for (int k = 0; k < 200; ++k) {
     const mme::Model m = e.currentModel();
     ASSERT_EQ(m.particles.size(), 3u);
     EXPECT_GT(e.frameRateHz(), 0.0);
+    EXPECT_EQ(e.window().numFrames(), 50);
   }
+  EXPECT_FALSE(finished) << "the reads waited for the running update";
   e.reset(false);
   EXPECT_FALSE(e.estimate().valid) << "reset clears the estimate at once";
-  e.replaceModel(model);
-  const int updates_after = updates;
+  worker.join();
+  EXPECT_FALSE(committed) << "an update in flight at reset() committed its stale result";
+  EXPECT_FALSE(e.estimate().valid);
+}
+
+// An update under way when the model is replaced never commits onto the new model: while a
+// worker runs updates back to back, every estimate seen after replaceModel() names the new
+// model's parameters. Then the population restarts: one update gives the generations of one.
+TEST_F(Fixture, AReplacedModelNeverReceivesAnOldUpdatesResult) {
+  mme::OnlineEstimatorOptions o = options();
+  o.generations_per_update = 20;
+  mme::OnlineEstimator e(model, o);
+  for (int t = 0; t < 50; ++t) ASSERT_EQ(e.addFrame(0.01 * t, frame(t), {}), "");
+  ASSERT_TRUE(e.update());
+  ASSERT_EQ(e.estimate().parameter_names, std::vector<std::string>{"s1/stiffness"});
+  mme::Model renamed = model;
+  renamed.bond_types[0].name = "s2";
+  std::atomic<bool> stop{false};
+  std::thread worker([&] {
+    while (!stop) e.update();
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  e.replaceModel(renamed);
+  std::vector<std::string> stale;  // the names of an estimate of the old model, if one is seen
+  for (int k = 0; k < 2000 && stale.empty(); ++k) {
+    const mme::Estimate now = e.estimate();
+    if (now.valid && now.parameter_names != std::vector<std::string>{"s2/stiffness"})
+      stale = now.parameter_names;
+    std::this_thread::yield();
+  }
   stop = true;
   worker.join();
-  // Without the fix each currentModel() waited for at least one whole update (200 generations).
-  EXPECT_LT(updates_after - updates_before, 50)
-      << "200 model reads took " << (updates_after - updates_before) << " updates";
-  // After the replacement the population restarts: the next estimate starts from generation 0.
+  EXPECT_TRUE(stale.empty()) << "an estimate of the old model (" << stale.front()
+                             << ") was committed after replaceModel()";
+  e.replaceModel(model);
   ASSERT_TRUE(e.update());
-  EXPECT_LE(e.estimate().generation, 200u);
+  EXPECT_EQ(e.estimate().parameter_names, std::vector<std::string>{"s1/stiffness"});
+  EXPECT_LE(e.estimate().generation, 20u);
 }

@@ -104,7 +104,9 @@ class OnlineEstimator {
   std::string addFrame(double time_s, const std::vector<Eigen::Vector3d>& positions_m,
                        const std::vector<uint8_t>& occluded);
   /// Runs generations_per_update generations on the current window (call from one worker
-  /// thread). Returns false when there are not enough frames yet.
+  /// thread). Returns false when there are not enough frames yet, or when reset() or
+  /// replaceModel() came during the update: its result belongs to the old model, so it stops at
+  /// the next generation and is never committed.
   bool update();
   /// Waits for a refinement running beside the generations (tests; update() never waits).
   void waitForRefinement();
@@ -148,6 +150,8 @@ class OnlineEstimator {
   mutable std::mutex model_mutex_;
   Model model_;
   uint64_t model_version_ = 0;
+  /// Whether reset() or replaceModel() came since `version` was read.
+  bool modelChangedSince(uint64_t version) const;
 
   /// The refinement running beside the generations (guarded by update_mutex_).
   struct BackgroundRefinement;

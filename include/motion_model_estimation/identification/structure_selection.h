@@ -62,6 +62,12 @@ struct StructureOptions {
   /// the chosen structure depend on the machine's load); identify.max_wall_time_s, when set,
   /// still bounds each refit.
   int refit_generations = 100;
+  /// [s] wall time of the whole selection (0 = no limit), read between its steps (each removal
+  /// of the elimination, each pass, each level; a refit gets what is left). Once spent, no
+  /// further level starts and a level under way is given up, except the first, which ends
+  /// on its elimination so far (non-physical bonds dropped, not refitted) so that there is a
+  /// level to choose.
+  double max_wall_time_s = 0.0;
   IdentifyOptions identify;       ///< the refits' settings
   std::function<void(const std::string&)> progress;  ///< a line per step (may be empty)
 };
@@ -95,6 +101,7 @@ struct StructureResult {
   /// constant velocity, constant acceleration, gravity only.
   double guess_rms_m[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
   std::vector<std::string> notes;
+  bool stopped_by_time = false;              ///< max_wall_time_s cut the selection (a note says where)
 };
 
 /// A window split for judging on frames never fitted: the first frames fitted, the last
