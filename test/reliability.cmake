@@ -12,3 +12,8 @@ if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(test_online_estimator_input test/reliability/test_online_estimator_input.cpp)
   target_link_libraries(test_online_estimator_input ${MME_LIBS} gtest_main)
 endif()
+
+# structure_sweep: structure selection on windows of the real captures (scripts/sweep-structure,
+# test/cli/test_structure_sweep.sh, and scripts/test --sanitize under the sanitizers).
+add_executable(structure_sweep test/reliability/structure_sweep.cpp)
+target_link_libraries(structure_sweep ${MME_LIBS})

@@ -373,6 +373,11 @@ Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
     cols = kept_cols;
     ++since_solve;
   };
+  if (deadline.passed() && !finish_when_cut) {  // given up before the first solve
+    Selection s;
+    s.cut = true;
+    return s;
+  }
   resolve();
   bool cut = false;
   for (;;) {
@@ -1125,7 +1130,9 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       for (ParamId id : {kMinDistance, kMaxDistance})
         if (conditional && type.param(id).present) type.param(id).free = true;
     }
-    if (options.refit && deadline.passed()) {
+    if (options.refit && freeParameters(cand->model).empty()) {
+      say("structure: " + cand->name + ": no bond and no gravity kept: nothing to refit");
+    } else if (options.refit && deadline.passed()) {
       say("structure: " + cand->name + ": not refitted (the time limit is spent); judged with the "
           "equation error's values");
     } else if (options.refit) {
@@ -1272,6 +1279,10 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       // The noise level of the full candidate model's residual, floored at round-off.
       std::vector<int> all = activeColumns(groups, always);
       const NormalEquationsSolution solved_all = solveActive(sys, all, false, cand.name);
+      if (!candidates.empty() && deadline.passed()) {
+        given_up = true;
+        break;
+      }
       const Eigen::VectorXd& theta_all = solved_all.theta;
       const double rms_b = std::sqrt(sys.btb / std::max<size_t>(sys.rows, 1));
       // Round-off of the equation error (conditioning included) on exact data: 1e-6 of the rows' RMS,
@@ -1361,6 +1372,7 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       const Model typed_start = typed;  // typing's values, before any fit moved them
       EquationErrorResult typed_fit;
       for (int round = 0;; ++round) {
+        if (out_of_time) break;  // no typing: one type per bond
         if (nonlinear) convergeLinearized(&typed, fit, level_ee);
         typed_fit = solveEquationError(typed, fit, level_ee);
         if (!typed_fit.applicable || round == kMaxPasses) break;

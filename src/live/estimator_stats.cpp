@@ -33,8 +33,16 @@ std::string formatStats(const EstimatorStats& s) {
     }
     text += s.prediction->rollout_bounded ? " rollout_bounded=1" : " rollout_bounded=0";
   }
-  if (!s.structure.empty())
+  if (!s.structure.empty()) {
     text += " structure_selections=" + std::to_string(s.structure_selections) + " structure=" + s.structure;
+    if (s.structure_cut) text += " structure_cut=1";
+    if (!s.structure_error.empty()) {
+      std::string why = s.structure_error;  // one line: ~stats is read line by line
+      for (char& c : why)
+        if (c == '\n' || c == '\r') c = ' ';
+      text += " structure_error=" + why;
+    }
+  }
   return text;
 }
 

@@ -41,6 +41,7 @@ std::optional<StructureResult> StructureJob::runIfDue(const Trajectory& window) 
     std::lock_guard<std::mutex> lock(mutex_);
     status_ = requested_ ? "pending" : "chosen:" + level;
     ++selections_;
+    last_cut_ = result.stopped_by_time;
     error_.clear();
     return result;
   } catch (const std::exception& e) {
@@ -54,6 +55,11 @@ std::optional<StructureResult> StructureJob::runIfDue(const Trajectory& window) 
 std::string StructureJob::status() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return status_;
+}
+
+bool StructureJob::lastCut() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return last_cut_;
 }
 
 std::string StructureJob::lastError() const {

@@ -108,6 +108,9 @@ EstimatorNodeOptions readEstimatorOptions(const ros::NodeHandle& pnh) {
   read(pnh, "select_structure", &o.select_structure);
   read(pnh, "structure_report_path", &o.structure_report_path);
   require(!o.structure_report_path.empty(), "~structure_report_path must not be empty");
+  read(pnh, "structure_max_time_sec", &o.structure_max_time_s);
+  require(o.structure_max_time_s >= 0.0 && std::isfinite(o.structure_max_time_s),
+          "~structure_max_time_sec must be >= 0 (0 = no limit)");
   read(pnh, "prediction_period_sec", &o.prediction_period_sec);
   require(o.prediction_period_sec >= 0.0 && std::isfinite(o.prediction_period_sec),
           "~prediction_period_sec must be >= 0 (0 = off)");
@@ -203,6 +206,7 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
     if (structure_report_target_.empty()) throw InputError("~structure_report_path: " + error);
     StructureOptions so;
     so.identify.es.threads = estimator_options.es.threads;
+    so.max_wall_time_s = options_.structure_max_time_s;
     so.progress = [](const std::string& line) { ROS_INFO("estimator_node: %s", line.c_str()); };
     // A resumed model has its structure: the selection then waits for ~reset.
     const bool resumed = estimator_options.resume_from_model_values;
@@ -398,6 +402,8 @@ void EstimatorNode::onStatsTimer(const ros::WallTimerEvent&) {
   if (structure_) {
     stats.structure = structure_->status();
     stats.structure_selections = structure_->selections();
+    stats.structure_cut = structure_->lastCut();
+    if (stats.structure == "failed") stats.structure_error = structure_->lastError();
   }
   std_msgs::String msg;
   msg.data = formatStats(stats);

@@ -66,4 +66,20 @@ TEST(EstimatorStats, StructureStateLastWhenSelectionIsOn) {
   EXPECT_EQ(line.substr(line.size() - 56), " structure_selections=2 structure=chosen:springs+dampers");
 }
 
+TEST(EstimatorStats, AFailedSelectionSaysWhyOnOneLineAndACutOneIsFlagged) {
+  mme::EstimatorStats s;
+  s.structure = "chosen:springs";
+  s.structure_selections = 1;
+  s.structure_cut = true;
+  EXPECT_NE(mme::formatStats(s).find(" structure=chosen:springs structure_cut=1"), std::string::npos);
+  s.structure = "failed";
+  s.structure_cut = false;
+  s.structure_error = "structure selection: 30 frames are too few\n(need 35)";
+  const std::string line = mme::formatStats(s);
+  EXPECT_EQ(line.find("structure_cut"), std::string::npos);
+  const std::string tail = " structure=failed structure_error=structure selection: 30 frames are too few (need 35)";
+  ASSERT_GE(line.size(), tail.size());
+  EXPECT_EQ(line.substr(line.size() - tail.size()), tail);
+}
+
 }  // namespace

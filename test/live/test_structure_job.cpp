@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/identification/marker_model.h"
+#include "motion_model_estimation/io/trajectory_io.h"
 #include "motion_model_estimation/live/structure_job.h"
 #include "motion_model_estimation/scenes/random_object.h"
 #include "test_helpers.h"
@@ -64,6 +66,22 @@ TEST(StructureJob, AnUnusableWindowFailsWithTheReason) {
   EXPECT_EQ(job.status(), "failed");
   EXPECT_NE(job.lastError().find("candidate"), std::string::npos) << job.lastError();
   EXPECT_EQ(job.selections(), 0u);
+}
+
+// The real window that crashed the node (test/data/crash): with the time limit spent at once the
+// job still chooses (the first level's elimination so far) and says it was cut.
+TEST(StructureJob, ACutSelectionOnTheCrashWindowChoosesAndIsFlagged) {
+  const mme::Trajectory data =
+      mme::sliceFrames(mme::readTrajectoryFile(std::string(MME_TEST_DATA_DIR) + "/crash/window_0_99.trc"), 0, 80);
+  mme::StructureOptions options = quickOptions();
+  options.max_wall_time_s = 1e-9;
+  mme::StructureJob job(mme::markerModel(data), options, 80);
+  const std::optional<mme::StructureResult> r = job.runIfDue(data);
+  ASSERT_TRUE(r.has_value()) << job.lastError();
+  EXPECT_EQ(job.status(), "chosen:springs");
+  EXPECT_TRUE(job.lastCut());
+  EXPECT_TRUE(r->stopped_by_time);
+  EXPECT_FALSE(r->model.bonds.empty());
 }
 
 }  // namespace

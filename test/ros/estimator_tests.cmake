@@ -12,7 +12,8 @@ set(MME_ESTIMATOR_TEST_NODES
   test_estimator_services      # ~reset, ~export_model, ~load_model
   test_estimator_tracking      # a parameter step followed
   test_estimator_bad_input     # bad frames survived and counted
-  test_estimator_structure)    # ~select_structure on a bag
+  test_estimator_structure     # ~select_structure on a bag
+  test_estimator_structure_crash)  # ~select_structure on the real window that crashed it
 foreach(node ${MME_ESTIMATOR_TEST_NODES})
   add_executable(${node} EXCLUDE_FROM_ALL test/ros/${node}.cpp)
   target_link_libraries(${node} mme_ros ${MME_LIBS} ${catkin_LIBRARIES} ${GTEST_LIBRARIES})
@@ -28,7 +29,18 @@ add_custom_command(
   COMMAND simulate --scene paper_object --frames 150 --out "${MME_ESTIMATOR_TEST_BAG}"
   DEPENDS simulate
   COMMENT "Simulating the estimator tests' bag (paper_object, 150 frames)")
-add_custom_target(mme_estimator_test_data DEPENDS "${MME_ESTIMATOR_TEST_BAG}")
+# The real window that crashed structure selection (test/data/crash), as a bag and a model of its
+# particles alone.
+set(MME_CRASH_BAG "${MME_ESTIMATOR_TEST_DIR}/crash_window_0_99.bag")
+set(MME_CRASH_MODEL "${MME_ESTIMATOR_TEST_DIR}/crash_window_0_99_particles.yaml")
+add_custom_command(
+  OUTPUT "${MME_CRASH_BAG}" "${MME_CRASH_MODEL}"
+  COMMAND ${CMAKE_COMMAND} -E make_directory "${MME_ESTIMATOR_TEST_DIR}"
+  COMMAND convert --trajectory "${CMAKE_CURRENT_SOURCE_DIR}/test/data/crash/window_0_99.trc"
+          --out "${MME_CRASH_BAG}" --particles-out "${MME_CRASH_MODEL}"
+  DEPENDS convert "${CMAKE_CURRENT_SOURCE_DIR}/test/data/crash/window_0_99.trc"
+  COMMENT "Converting the structure-selection crash window to a bag")
+add_custom_target(mme_estimator_test_data DEPENDS "${MME_ESTIMATOR_TEST_BAG}" "${MME_CRASH_BAG}")
 add_dependencies(tests mme_estimator_test_data)
 
 # mme_add_estimator_rostest(NAME [ARGS name:=value ...] [DEPENDENCIES target ...])
@@ -66,3 +78,6 @@ mme_add_estimator_rostest(estimator_bad_input DEPENDENCIES test_estimator_bad_in
 mme_add_estimator_rostest(estimator_structure
   ARGS "bag:=${MME_ESTIMATOR_TEST_BAG}" "model_dir:=${MME_ESTIMATOR_TEST_DIR}/structure_models"
   DEPENDENCIES test_estimator_structure mme_estimator_test_data)
+mme_add_estimator_rostest(estimator_structure_crash
+  ARGS "bag:=${MME_CRASH_BAG}" "model:=${MME_CRASH_MODEL}"
+  DEPENDENCIES test_estimator_structure_crash mme_estimator_test_data)

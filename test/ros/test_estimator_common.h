@@ -7,6 +7,7 @@
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
+#include <std_msgs/String.h>
 #include <topic_tools/shape_shifter.h>
 
 #include <Eigen/Geometry>
@@ -42,6 +43,41 @@ inline std::map<std::string, double> parseStatsLine(const std::string& line) {
   }
   return fields;
 }
+
+/// The latest ~stats line (thread-safe).
+class StatsWatcher {
+ public:
+  explicit StatsWatcher(ros::NodeHandle& nh, const std::string& topic = "estimator/stats") {
+    sub_ = nh.subscribe<std_msgs::String>(topic, 10, [this](const std_msgs::String::ConstPtr& m) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      line_ = m->data;
+      ++count_;
+    });
+  }
+  std::string line() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return line_;
+  }
+  /// ~stats messages received so far.
+  int count() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return count_;
+  }
+  bool waitFor(const std::function<bool(const std::string&)>& done, double timeout_s) const {
+    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_s);
+    while (ros::ok() && ros::WallTime::now() < deadline) {
+      if (done(line())) return true;
+      ros::WallDuration(0.05).sleep();
+    }
+    return done(line());
+  }
+
+ private:
+  ros::Subscriber sub_;
+  mutable std::mutex mutex_;
+  std::string line_;
+  int count_ = 0;
+};
 
 using motion_model_estimation::MarkerFrame;
 using motion_model_estimation::ModelEstimate;

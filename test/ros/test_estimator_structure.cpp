@@ -3,7 +3,6 @@
 // then carries a spring model whose stiffnesses, sorted, are paper_object's within 1 % (the
 // chosen types are named s00.., not the scene's, so they are compared as a set); the report CSV
 // is in ~model_dir; ~reset says the structure is chosen again, and it is (two selections).
-#include <std_msgs/String.h>
 #include <std_srvs/Trigger.h>
 
 #include <fstream>
@@ -14,34 +13,6 @@
 namespace {
 
 using namespace mmetest;
-
-/// The latest ~stats line (thread-safe).
-class StatsWatcher {
- public:
-  explicit StatsWatcher(ros::NodeHandle& nh) {
-    sub_ = nh.subscribe<std_msgs::String>("estimator/stats", 10, [this](const std_msgs::String::ConstPtr& m) {
-      std::lock_guard<std::mutex> lock(mutex_);
-      line_ = m->data;
-    });
-  }
-  std::string line() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return line_;
-  }
-  bool waitFor(const std::function<bool(const std::string&)>& done, double timeout_s) const {
-    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_s);
-    while (ros::ok() && ros::WallTime::now() < deadline) {
-      if (done(line())) return true;
-      ros::WallDuration(0.05).sleep();
-    }
-    return done(line());
-  }
-
- private:
-  ros::Subscriber sub_;
-  mutable std::mutex mutex_;
-  std::string line_;
-};
 
 /// Stiffness values of an estimate ("<type>/stiffness"), sorted.
 std::vector<double> stiffnesses(const ModelEstimate& e) {

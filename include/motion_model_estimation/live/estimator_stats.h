@@ -24,6 +24,8 @@ struct EstimatorStats {
   std::optional<PredictionReport> prediction;  ///< the model's predictions on the window
   std::string structure;     ///< ~select_structure's state (StructureJob::status), "" = off
   uint32_t structure_selections = 0;  ///< ... and the selections that chose a model
+  bool structure_cut = false;  ///< the last selection was cut by its time limit
+  std::string structure_error;  ///< why the last selection failed ("" unless failed)
 };
 
 /// "accepted=N rejected=N occluded=N rejected_time=N rejected_size=N clock_jumps=N updates=N
@@ -33,7 +35,9 @@ struct EstimatorStats {
 /// constant_velocity, constant_acceleration, gravity_only) "predict<K>_<P>_mm=X" (RMS per
 /// coordinate [mm], 3 decimals; horizons without a sample are left out) and
 /// "rollout_bounded=0|1"; with ~select_structure, "structure_selections=N" (selections that
-/// chose a model) and "structure=idle|pending|running|chosen:<level>|failed".
+/// chose a model) and "structure=idle|pending|running|chosen:<level>|failed", then
+/// "structure_cut=1" when the time limit cut the last selection, and last, when it failed,
+/// "structure_error=<why>" (the rest of the line: the reason has spaces).
 std::string formatStats(const EstimatorStats& stats);
 
 }  // namespace mme

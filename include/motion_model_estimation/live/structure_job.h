@@ -33,6 +33,9 @@ class StructureJob {
   std::string status() const;
   std::string lastError() const;
   int minFrames() const { return min_frames_; }
+  /// Whether the time limit (StructureOptions::max_wall_time_s) cut the last selection that
+  /// chose a model (thread-safe).
+  bool lastCut() const;
   uint32_t selections() const;  ///< selections that chose a model
 
  private:
@@ -44,6 +47,7 @@ class StructureJob {
   std::string status_ = "pending";
   std::string error_;
   uint32_t selections_ = 0;
+  bool last_cut_ = false;
 };
 
 }  // namespace mme

@@ -66,6 +66,9 @@ struct EstimatorNodeOptions {
   /// may then hold the particles alone (structure_selection.h).
   bool select_structure = false;
   std::string structure_report_path = "structure_report.csv";  ///< inside model_dir
+  /// [s] wall time of one structure selection (0 = no limit): a cut selection chooses the best
+  /// level judged so far (StructureOptions::max_wall_time_s).
+  double structure_max_time_s = 120.0;
   OnlineEstimatorOptions estimator;
 };
 
