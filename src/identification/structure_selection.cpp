@@ -1223,11 +1223,9 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
     std::vector<Group> groups;
     int screening_rounds = 0;
     bool given_up = false;  // the time limit ran out during this level (not the first)
+    const auto giveUp = [&]() { return given_up = !candidates.empty() && deadline.passed(); };
     for (int pass = 0; pass < kMaxPasses; ++pass) {
-      if (!candidates.empty() && deadline.passed()) {
-        given_up = true;
-        break;
-      }
+      if (giveUp()) break;
       if (nonlinear) convergeLinearized(&full, fit, level_ee);
       const EquationErrorSystem sys = buildEquationErrorSystem(full, fit, level_ee);
       if (!sys.reason.empty())
@@ -1279,10 +1277,7 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       // The noise level of the full candidate model's residual, floored at round-off.
       std::vector<int> all = activeColumns(groups, always);
       const NormalEquationsSolution solved_all = solveActive(sys, all, false, cand.name);
-      if (!candidates.empty() && deadline.passed()) {
-        given_up = true;
-        break;
-      }
+      if (giveUp()) break;
       const Eigen::VectorXd& theta_all = solved_all.theta;
       const double rms_b = std::sqrt(sys.btb / std::max<size_t>(sys.rows, 1));
       // Round-off of the equation error (conditioning included) on exact data: 1e-6 of the rows' RMS,
@@ -1300,16 +1295,9 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
       }
       Selection sel = eliminate(sys, groups, always, sigma2, cand.name, deadline, candidates.empty(),
                                 options.progress);
-      if (sel.cut && !candidates.empty()) {
-        given_up = true;
-        break;
-      }
+      if (giveUp()) break;
       Solved solved = describe(full, sys, sel, sigma2, first_candidate_type, dampers);
-      const bool out_of_time = deadline.passed();
-      if (out_of_time && !candidates.empty()) {
-        given_up = true;
-        break;
-      }
+      const bool out_of_time = deadline.passed();  // the first level ends on what it has
       // Bonds the neighbourhoods missed (long ones): pairs the residual asks for become
       // candidates too, and the selection runs again (at most 4 rounds of 20). Before the
       // non-physical drops: a missing bond makes true ones come out wrong.
@@ -1357,6 +1345,7 @@ StructureResult selectStructure(const Model& given, const Trajectory& data,
         say("structure: " + line);
         result.notes.push_back(line);
         dropNonPhysical(&solved, first_candidate_type);
+        sel.parameters = static_cast<int>(freeParameters(solved.model).size());  // rss: as solved
       }
       // Types: one per bond, or shared where the values agree; the criterion decides.
       const double untyped_bic = bic(sel.rss_m2, sys.rows, sel.parameters, floor2);

@@ -2,6 +2,9 @@
 """Regenerates the seed corpora in test/fuzz/corpus/ from the repository's real files.
 
 trc/:          arm26_elbow_flex.trc whole, the other real TRC files cut to their first rows.
+structure/:    the structure-selection sweep's windows (scripts/sweep-structure) of the real TRC
+               captures and the crash reproducer (test/data/crash): 40 and 80 frames at the start
+               and the end, the first 6 markers (what fuzz_structure selects on).
 c3d/:          the real C3D files with the data cut to ~20 KB and the header's last frame set to
                match (so they still parse and the fuzzer starts inside the data loop), plus the
                whole Sample02 files (< 100 KB).
@@ -40,6 +43,34 @@ def trc():
             lines = f.read().split(b"\n")
         lines = lines[:6 + rows] + [b""]
         put("trc", name, b"\n".join(lines))
+
+
+def trc_window(path, first, frames, markers):
+    """A TRC file of `frames` rows from row `first` and the first `markers` markers."""
+    lines = open(path, "rb").read().replace(b"\r", b"").split(b"\n")
+    head, rows = lines[:5], [l for l in lines[5:] if l.strip()]
+    meta = head[2].split()  # values, whatever the spacing (some writers pad with tabs)
+    markers = min(markers, int(meta[3]))
+    meta[2], meta[3] = str(frames).encode(), str(markers).encode()
+    head[2] = b"\t".join(meta)
+    names = head[3].split(b"\t")
+    head[3] = b"\t".join(names[:2 + 3 * markers])
+    head[4] = b"\t".join(head[4].split(b"\t")[:2 + 3 * markers])
+    body = [b"\t".join(r.split(b"\t")[:2 + 3 * markers]) for r in rows[first:first + frames]]
+    return b"\n".join(head + body) + b"\n"
+
+
+def structure():
+    captures = [os.path.join(REAL, n) for n in sorted(os.listdir(REAL)) if n.endswith(".trc")]
+    captures.append(os.path.join(REPO, "test", "data", "crash", "window_0_99.trc"))
+    for path in captures:
+        rows = sum(1 for l in open(path, "rb").read().split(b"\n")[5:] if l.strip())
+        for frames in (40, 80):
+            if frames > rows:
+                continue
+            for first in sorted({0, rows - frames}):
+                name = "%s_%d_%d.trc" % (os.path.basename(path)[:-4], first, frames)
+                put("structure", name, trc_window(path, first, frames, 6))
 
 
 def c3d():
@@ -147,6 +178,7 @@ def marker_frame():
 
 if __name__ == "__main__":
     trc()
+    structure()
     c3d()
     model_yaml()
     marker_frame()
