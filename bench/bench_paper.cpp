@@ -659,7 +659,7 @@ WalkerScore scoreWalker(const Model& truth_model, const mme::Trajectory& data,
 /// segment's frames, then 2, 4, then all). Every
 /// parameter's error beside its Cramer-Rao bound at 0.1 mm marker noise (what the 50 frames can
 /// tell about it) goes to walker_oe_params.csv. Opt-in (`--only walker_oe`, ~40 minutes): the
-/// README's "Identifying the walker" figures.
+/// "Identifying the walker" figures of docs/scenes.md.
 void walkerOutputError(const Settings& s) {
   std::FILE* f = openCsv(s.out_dir + "/walker_oe.csv",
                          "start_off,signs,continuity,segment_frames,grow_segments,iterations,"

@@ -175,7 +175,7 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
         break;
       case BondKind::kMuscle:
         // The activation is a network of other bonds' motion: every free muscle parameter is
-        // left to the evolution strategy and the refinements (README "Muscles").
+        // left to the evolution strategy and the refinements (docs/muscles.md).
         break;
       case BondKind::kFloor:  // conditional on contact: left to the search too
         break;

@@ -24,7 +24,7 @@ bool isPositivePhysical(int param) {
 /// Default half-width of a floor height's search range around its guess (or 0) [m].
 constexpr double kFloorHeightRange_m = 1.0;
 
-/// Default search range of a muscle's network parameter (README "Muscles"): weights read
+/// Default search range of a muscle's network parameter (docs/muscles.md): weights read
 /// elongations of centimetres, so +-100 [1/m] (or [s/m]) reaches tanh's saturation; biases
 /// beyond +-5 only saturate.
 constexpr double kNetworkWeightBound = 100.0;

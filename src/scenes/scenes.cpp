@@ -430,7 +430,7 @@ Scene makeFluidJet() {
 // ------------------------------------------------------------------------------------------
 // walker: the horse of section 4.4 with its 35 markers at 50 Hz (5 per leg: leg_<fl|fr|hl|hr>_0
 // shoulder/hip .. _4 hoof; 15 body/head markers body_00..body_14). It trots on a floor, driven
-// by known muscle controllers (README "The walker": the laws, figures and limits).
+// by known muscle controllers (docs/scenes.md "The walker": the laws, figures and limits).
 //  - trunk, neck and head: one triangular prism truss along x, 6 cross-sections (x = -0.6 ..
 //    1.4 m, step 0.4 m), equilateral of edge 0.4 m: two bottom "rails" (y = +-0.2 m) and a top
 //    ridge; every rectangular face braced by one diagonal. Sections 0..3 are the trunk (the legs
@@ -470,9 +470,10 @@ constexpr double kWalkerTailMassKg = 4.0;
 constexpr double kWalkerNeckMassKg = 2.0;
 constexpr double kWalkerHeadMassKg = 1.0;
 constexpr double kWalkerTailKickMps = 0.5;  // the tail's initial upward speed
-// Controller weights (README "walker"): the tail's drive [s/m]; the stride units read the tail's
-// top spring (elongation [1/m], speed [s/m], centred on its mean elongation [m]); the servos
-// read their reach or cannon spring; outputs are dimensionless (the gains are in N).
+// Controller weights (docs/scenes.md "The walker"): the tail's drive [s/m]; the stride units
+// read the tail's top spring (elongation [1/m], speed [s/m], centred on its mean elongation
+// [m]); the servos read their reach or cannon spring; outputs are dimensionless (the gains are
+// in N).
 constexpr double kTailDriveGainN = 4.43, kTailDriveSpeed = -20.0, kTailMeanM = 0.04;
 constexpr double kSwingGainN = 2740.0, kSwingStrideZ = -99.6, kSwingStrideS = 0.9;
 constexpr double kReachServoZ = 28.0, kReachServoS = 0.5, kReachOut = 10.0, kSwingOut = 2.73;
@@ -620,7 +621,7 @@ Scene makeWalker() {
   // Ground contact, free: stiffness, damping, friction; the floor's height (0) and contact
   // depth fixed. The damping and friction grow over the first 0.3 mm of the 4.5-6 mm a stance
   // hoof sinks: without that the force jumps at touch-down and gradient fits stall on the jumps
-  // it makes in the motion (README "Identifying the walker").
+  // it makes in the motion (docs/scenes.md "Identifying the walker").
   BondType ground;
   ground.name = "ground";
   ground.kind = BondKind::kFloor;

@@ -5,7 +5,7 @@
 # the binary by its devel-space path (rosrun's `find -L` over the repository costs about a
 # second a call, more on a loaded machine); the good case goes through rosrun, the user's
 # command, which must find one estimator_node and not ask which to run (the sanitizer workspace
-# of `scripts/test --sanitize` lies outside the repository for that; README "Tests").
+# of `scripts/test --sanitize` lies outside the repository for that; docs/reliability.md "Tests").
 # MME_DEVEL=<catkin devel space> tests another workspace than the repository's .ws.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/../.." && pwd)

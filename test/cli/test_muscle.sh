@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Muscles through the tools: the README's muscle example (taken from the README itself, so the
-# documented file stays valid) is simulated and identified from guesses to round-off with its
+# Muscles through the tools: the documented muscle example (taken from docs/muscles.md itself, so
+# the documented file stays valid) is simulated and identified from guesses to round-off with its
 # network parameters named <type>/w2_<i>; the export loads back and simulates the same motion; bad muscle
 # definitions stop identify with exit 2 and one line naming file, line and key.
 set -euo pipefail
@@ -9,9 +9,9 @@ source "$here/scripts/env.sh"
 bin="$here/.ws/devel/lib/motion_model_estimation"
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 
-# The first yaml block of the README's "Muscles" section.
+# The first yaml block of docs/muscles.md's "## Muscles" section (the `muscle` bond kind).
 awk '/^## Muscles/ { s = 1 } s && /^```yaml/ { p = 1; next } p && /^```/ { exit } p' \
-  "$here/README.md" >"$tmp/muscle.yaml"
+  "$here/docs/muscles.md" >"$tmp/muscle.yaml"
 grep -q "kind: muscle" "$tmp/muscle.yaml"
 "$bin/simulate" --model "$tmp/muscle.yaml" --frames 100 --out "$tmp/data.trc" >/dev/null
 "$bin/identify" --model "$tmp/muscle.yaml" --trajectory "$tmp/data.trc" --out "$tmp/out.yaml" \
@@ -52,8 +52,8 @@ set -e
 [ "$rc" -eq 2 ] || { echo "simulate: expected exit 2, got $rc"; exit 1; }
 grep -q "key 'w1_0_0': unknown key for a muscle in bond type 'm'" "$tmp/bad2.err" ||
   { echo "unexpected error: $(cat "$tmp/bad2.err")"; exit 1; }
-# Muscles on a passive model (--add-muscles): the README example's bonds, all passive (the muscle
-# a plain spring, every spring part free with the file's values as guesses), fitted to the
+# Muscles on a passive model (--add-muscles): the documented example's bonds, all passive (the
+# muscle a plain spring, every spring part free with the file's values as guesses), fitted to the
 # muscle's motion; then every spring type a muscle started from that fit: the cost falls (a
 # warm start never loses the passive fit), the export names the inputs and simulates.
 sed -e '/^  - name: m$/,/^    b2:/c\  - {name: m, kind: spring, stiffness: {value: 40, free: true}, rest_length: {value: 0.25, free: true}, damping: {value: 0.2, free: true}}' \
@@ -169,4 +169,4 @@ grep -q "^identify: warning: no sensor muscles (sensor muscles: 40 frames are to
 grep -q "sensor muscles: none (sensor muscles: 40 frames are too few" "$tmp/short.yaml" ||
   { echo "the written model's notes do not say why it has no sensor muscles"; exit 1; }
 
-echo "muscle: README example simulated, identified, exported and reloaded; bad definitions refused; muscles placed on a passive fit lower its cost; sensor muscles predict its held-out frames better"
+echo "muscle: documented example simulated, identified, exported and reloaded; bad definitions refused; muscles placed on a passive fit lower its cost; sensor muscles predict its held-out frames better"

@@ -9,7 +9,10 @@ c3d/:          the real C3D files with the data cut to ~20 KB and the header's l
                match (so they still parse and the fuzzer starts inside the data loop), plus the
                whole Sample02 files (< 100 KB).
 model_yaml/:   the scene model files config/models/*.yaml (the big ones thinned to a few
-               particles and the bonds between them) and the README's example.
+               particles and the bonds between them) and the short example of docs/model_file.md,
+               extended by hand with a free gravity, groups, conditions, flexion, viscosity and
+               an interaction (written out below, not read from the page; the seed file keeps
+               its old name readme_example.yaml).
 marker_frame/: serialised motion_model_estimation/MarkerFrame messages (ROS wire format) for
                the 3-particle model of fuzz_marker_frame.cpp: valid, occluded, NaN, unknown
                names, mismatched lengths.
@@ -125,6 +128,7 @@ def model_yaml():
         elif name.startswith("walker"):
             text = thin_model(text, lambda p: p.startswith("leg_f") or p < "body_05")
         put("model_yaml", name, text)
+    # docs/model_file.md's short example (p0, p1, spring type s01), extended.
     put("model_yaml", "readme_example.yaml", """frame_rate_hz: 100
 gravity: {value: [0, 0, -9.81], free: [false, false, true], min: [~, ~, -20], max: 0}
 particles:

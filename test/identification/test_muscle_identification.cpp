@@ -161,7 +161,7 @@ TEST(MuscleIdentification, FreeMusclesOnDataWithoutAControllerChangeTheCostByLes
                                     << with.global_cost << " m^2";
 }
 
-// Why the paper's one-step cost cannot identify the walker to issue 16's 1 % (README
+// Why the paper's one-step cost cannot identify the walker to issue 16's 1 % (docs/scenes.md
 // "Identifying the walker"): its contact and servos move the markers between frames (80
 // substeps), so on its own noiseless frames the one-step cost at the true values is far from
 // round-off and the fourth-difference noise estimate reads 0.8 mm: `identify --cost auto`

@@ -206,7 +206,7 @@ TEST(OutputError, StartStatesFromTheModelFollowStiffMotionThatFrameDifferencesMi
   EXPECT_LT(from_model.start_cost_m2, 1e-3 * from_data.start_cost_m2);
   // With the walker's continuous contact (its floor's contact depth) the fitted states follow
   // the data to round-off: measured 1.5e-20 m^2, against 9.1e-7 with a force that jumps at
-  // touch-down (README "Ground contact").
+  // touch-down (docs/model_file.md "Ground contact").
   EXPECT_LT(from_model.start_cost_m2, 1e-15);
   EXPECT_EQ(from_model.genes, truth);  // no iteration: the parameters did not move
 }

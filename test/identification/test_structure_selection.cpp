@@ -141,7 +141,7 @@ TEST(StructureSelection, CubicStiffnessIsFoundByTheNonLinearLevel) {
 // conditional level, where the one-step residual asks for a bond to switch off, puts thresholds
 // on true cable bonds only, in rounds, and its model predicts the held-out frames far better
 // than every level without conditions. (Not yet exact: conditional bonds keep a type each and
-// some cable bonds stay unconditional; see the README.)
+// some cable bonds stay unconditional; see docs/structure_selection.md.)
 TEST(StructureSelection, ConditionalLevelFindsCables) {
   for (uint64_t seed : {4001u, 4002u}) {
     mme::RandomObjectSpec spec;

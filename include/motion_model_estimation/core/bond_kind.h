@@ -29,7 +29,7 @@ enum ParamId : int {
   kFriction,          ///< floor: viscous friction along the floor while in contact [N s/m]
   kHeight,            ///< floor: height of the floor plane z = height [m] (world z up)
   /// floor: depth over which damping and friction grow from 0 to full [m]; 0 or absent: full
-  /// from the first contact (README "Ground contact")
+  /// from the first contact (docs/model_file.md "Ground contact")
   kContactDepth,
   /// muscle: activation dynamics' time constant [s]; 0 or absent: the activation is the
   /// network's output at once (muscle.h)

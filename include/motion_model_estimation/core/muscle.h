@@ -1,6 +1,6 @@
 // The muscle bond kind's controller: a small feed-forward network whose inputs are the
 // elongations and elongation speeds of other bonds and whose output, times a gain, is added to
-// the bond's visco-elastic tension (README "Muscles"). Layout and naming of its parameters,
+// the bond's visco-elastic tension (docs/muscles.md). Layout and naming of its parameters,
 // and the activation itself.
 //
 // Network inputs z (2n of them for n input bonds): z_i = l_i - L_i [m] for i < n, then
@@ -10,7 +10,7 @@
 //   excitation u = gain * tanh(y)   [N]
 //   activation a = u, added to the tension (a > 0 pulls the ends together); with the type's
 //   activation_time_constant tau > 0, a is a state instead: da/dt = (u - a) / tau (Simulator,
-//   State::activation_n; README "Muscles")
+//   State::activation_n; docs/muscles.md)
 // Parameters in storage order: w1 (row-major, H x 2n), b1 (H), w2 (H, or 2n when H = 0), b2.
 #pragma once
 

@@ -41,16 +41,17 @@ struct OutputErrorOptions {
   /// segment's first `start_state_frames` frames after its start (a small least-squares fit per
   /// segment, parameters held), instead of the data's positions and frame differences (0). The
   /// frame difference is not the velocity when stiff forces act within a frame, and a joint fit
-  /// from it moves the parameters to absorb the error (README "Identifying the walker").
+  /// from it moves the parameters to absorb the error (docs/scenes.md "Identifying the walker").
   int start_state_frames = 2;
   /// Continuation in the data's length: when > 0, the fit runs first on the frames of the first
   /// `grow_segments` segments, then on twice as many segments, and so on, then on all the
   /// frames, each stage from the last one's answer with both continuity stages and
   /// max_iterations (max_time_s bounds them all; a stop by time or `cancel` still judges the
   /// answer on every frame): a way around local minima of one fit on every frame. Measured on
-  /// the walker (bench_paper --only walker_oe, 50 frames, 10-frame segments, 1 % off): see the
-  /// README "Identifying the walker". The result's iterations and wall time cover every stage;
-  /// its start_cost_m2 is the last stage's start (the previous stage's answer on all frames).
+  /// the walker (bench_paper --only walker_oe, 50 frames, 10-frame segments, 1 % off): see
+  /// docs/scenes.md "Identifying the walker". The result's iterations and wall time cover every
+  /// stage; its start_cost_m2 is the last stage's start (the previous stage's answer on all
+  /// frames).
   /// 0: one fit on every frame.
   int grow_segments = 0;
   double max_time_s = 0.0;          ///< 0 = no limit

@@ -31,7 +31,7 @@
 // data (bodyTravel: its markers' median range at least `travel_body_sizes` x the body's median
 // size); kNone always. Measured: see the option. A model with them
 // needs no anchor markers in the data (fixed particles stay where the model holds them).
-// Measured on bench_paper fig5's split, 10 frames ahead held out: see the README. On a small
+// Measured on bench_paper fig5's split, 10 frames ahead held out: see docs/muscles.md. On a small
 // body whose controller lives between its particles they fit the markers' noise instead
 // (muscleObject, 0.3 mm: 9.8 mm held out with them, 4.7 without): hence the choice.
 //
