@@ -37,7 +37,7 @@ const char* kUsage =
     "--max-time-s bounds the structure selection (all its levels together: a cut selection\n"
     "chooses the best level judged so far) and then the passive identification,\n"
     "--muscles-max-time-s the sensor muscles' search after them (checked between its steps: a\n"
-    "step under way and the final refits still run; see the README); 0, the default for both:\n"
+    "step under way and the final refits still run; see docs/muscles.md); 0, the default for both:\n"
     "no limit.\n";
 
 std::string formatMetres(double m) {
