@@ -252,7 +252,7 @@ void randomObjectFiles(const Settings& s) {
   std::printf("wrote %s/random18_truth.yaml and random18_model.yaml\n", s.out_dir.c_str());
 }
 
-/// What a user gets by default (issue 13): random objects like random18 and soft objects hanging
+/// What a user gets by default: random objects like random18 and soft objects hanging
 /// under gravity (springs stretched 2.4-20x their rest length), 10 seeds each, noiseless, each
 /// through a TRC file in millimetres, with a model file that gives no value and no bound for any
 /// free parameter; `identify`'s default engine (Preset::kDefault, whatever --preset says).
@@ -314,7 +314,7 @@ void defaultsExperiment(const Settings& s) {
   std::fclose(f);
 }
 
-/// Accuracy under noise against the Cramer-Rao bound (issue 14): paper_object, 100 frames, the
+/// Accuracy under noise against the Cramer-Rao bound: paper_object, 100 frames, the
 /// default engine (identify's defaults: the output-error estimator on noisy data), seeds 1..N
 /// per noise level. Per run: median and max error, the bound's median and max, how many
 /// parameters lie within 3 reported std, the largest std / bound ratio.
@@ -378,7 +378,7 @@ void accuracyExperiment(const Settings& s) {
   std::fclose(f);
 }
 
-/// The online estimator against the offline identification of the same window (issue 13: within
+/// The online estimator against the offline identification of the same window (within
 /// 2x once converged): frames fed at the data's rate, an update every 1/10 s of frames, then the
 /// window stops and updates run until a refinement finished on it; identifyModel on that window.
 void onlineExperiment(const Settings& s) {
@@ -463,7 +463,7 @@ mme::StructureOptions structureOptions(const Settings& s) {
   return so;
 }
 
-/// Structure selection (issue 15): random objects of known structure (15-25 markers, springs
+/// Structure selection: random objects of known structure (15-25 markers, springs
 /// only, springs + dampers, hardening springs; bent chains with flexion; noiseless, 10 seeds
 /// each), a 40-marker object for the time, and the real recordings (held-out frames as the judge).
 void structureExperiment(const Settings& s) {
@@ -595,7 +595,7 @@ void structureRealExperiment(const Settings& s) {
   std::fclose(g);
 }
 
-/// The walker's first 50 noiseless frames and its muscle-free parameters (issue 16's targets).
+/// The walker's first 50 noiseless frames and its muscle-free parameters (docs/scenes.md).
 struct WalkerCase {
   mme::Scene scene = mme::makeScene("walker");
   int frames = 50;
@@ -616,7 +616,7 @@ struct WalkerCase {
   }
 };
 
-/// How close an answer on the walker is (issue 16's targets): the parameters within 1 % of the
+/// How close an answer on the walker is (docs/scenes.md): the parameters within 1 % of the
 /// truth, the median and worst relative errors (and the worst's name), and the open loop's RMS
 /// distance from the data at the last frame.
 struct WalkerScore {
@@ -650,7 +650,7 @@ WalkerScore scoreWalker(const Model& truth_model, const mme::Trajectory& data,
   return score;
 }
 
-/// The output error alone on the walker (issue 16's identification targets): 50 noiseless frames,
+/// The output error alone on the walker (the walker's identification targets): 50 noiseless frames,
 /// 10-frame segments, its 40 muscle-free parameters started at the truth and 1 % off (alternate
 /// signs), the default options (start states fitted by the model, soft then hard continuity) at
 /// most 100 iterations per stage, for comparison 1 % off with hard continuity only, and 1 % off

@@ -1,4 +1,4 @@
-# Charts of the peer benchmark (issue 5), drawn by scripts/bench:
+# Charts of the peer benchmark, drawn by scripts/bench:
 #   gnuplot -e "dir='docs/bench'; scenes='paper_object ...'" bench/peers/charts.gp
 # Reads the CSV files bench_peers wrote into dir, writes PNG files next to them.
 set terminal pngcairo size 1200,800 noenhanced font ",10"

@@ -1,4 +1,4 @@
-# Peer-optimiser benchmark (issue 5): bench_peers, run by scripts/bench.
+# Peer-optimiser benchmark: bench_peers, run by scripts/bench.
 # pagmo2 (CMA-ES, SADE) and Ceres (Levenberg-Marquardt) are benchmark-only dependencies
 # (`scripts/setup --peers` installs libpagmo-dev libceres-dev): the package builds and runs
 # without them. The target is excluded from the default build (`make`/`catkin_make` never build

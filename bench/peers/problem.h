@@ -1,4 +1,4 @@
-// Identification problems for the peer benchmark (issue 5): a true model, the data it produced
+// Identification problems for the peer benchmark: a true model, the data it produced
 // (optionally perturbed: noise, occlusion, another frame rate), the paper's cost and search space
 // that every method shares, the random starts, parameter errors and the long-rollout check.
 #pragma once

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# scripts/bench --quick (issue 5): builds the peer benchmark, runs every method available (the
+# scripts/bench --quick: builds the peer benchmark, runs every method available (the
 # peer optimisers only when pagmo2/Ceres are installed: without them the run says so and the
 # remaining methods still run), and fails when a CSV file is missing, empty or not finite.
 # No package is installed here (--no-setup); results go to a temporary directory.

@@ -125,7 +125,7 @@ TEST(MuscleIdentification, TheEvolutionStrategyIdentifiesAMuscleFromNoInitialVal
   EXPECT_EQ(below_passive, 6);
 }
 
-// Issue 16's check that muscles do not fit what is not there: data of muscleObject() with the
+// The check that muscles do not fit what is not there: data of muscleObject() with the
 // muscle's gain 0 (a plain spring: no controller) and 0.1 mm marker noise. The passive model
 // (every spring part free) is identified; then the muscle's gain and network are freed too,
 // starting from the passive answer. The cost (dominated by the noise) may only fall by what 6
@@ -161,7 +161,7 @@ TEST(MuscleIdentification, FreeMusclesOnDataWithoutAControllerChangeTheCostByLes
                                     << with.global_cost << " m^2";
 }
 
-// Why the paper's one-step cost cannot identify the walker to issue 16's 1 % (docs/scenes.md
+// Why the paper's one-step cost cannot identify the walker to 1 % (docs/scenes.md
 // "Identifying the walker"): its contact and servos move the markers between frames (80
 // substeps), so on its own noiseless frames the one-step cost at the true values is far from
 // round-off and the fourth-difference noise estimate reads 0.8 mm: `identify --cost auto`

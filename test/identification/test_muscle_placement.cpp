@@ -1,4 +1,4 @@
-// Muscles placed on a passive model (issue 16, the paper's Fig. 5 experiment): which types become
+// Muscles placed on a passive model (the paper's Fig. 5 experiment): which types become
 // muscles and which bonds they read, that the placed muscles start silent (the passive model's
 // motion bit for bit, so a warm start can only improve), that on data a controller drove they
 // lower the cost far below the passive fit, and that on data made without one they change the

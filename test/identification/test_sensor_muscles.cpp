@@ -1,4 +1,4 @@
-// Sensor muscles (issue 16, real gait): muscles reading the pairs whose distance varies most,
+// Sensor muscles (real gait): muscles reading the pairs whose distance varies most,
 // fitted by ridge least squares and judged on held-out frames. That they learn a controller the
 // passive model lacks (the held-out open-loop error falls several-fold), that they stay silent
 // where no controller acted, that gaps only drop equations, that the model they write survives

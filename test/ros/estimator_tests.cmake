@@ -1,4 +1,4 @@
-# The estimator_node rostests (issue 4). Included by CMakeLists.txt inside
+# The estimator_node rostests. Included by CMakeLists.txt inside
 # if(CATKIN_ENABLE_TESTING); run with `catkin_make run_tests` (results in build/test_results).
 #
 # Test data is made at build time into the build directory (nothing binary in git): a bag of the

@@ -1,4 +1,4 @@
-// Muscles on a passive model (issue 16): the paper's section 4.4 experiment, "the same bonds,
+// Muscles on a passive model: the paper's section 4.4 experiment, "the same bonds,
 // driven by a neural controller", for a model whose passive structure is known (written by hand
 // or chosen by structure selection).
 //

@@ -1,4 +1,4 @@
-// Sensor muscles (issue 16, real gait): muscles that read the body's posture, fitted by least
+// Sensor muscles (real gait): muscles that read the body's posture, fitted by least
 // squares.
 //
 // Muscles placed on the passive bonds and reading their nearest bonds (muscle_placement.h) read
