@@ -13,12 +13,12 @@ constexpr int kSelectionMinFrames = 35;  ///< selectStructure: 20 fitted + 15 he
 StructureJob::StructureJob(Model base, StructureOptions options, int min_frames, bool request_first)
     : base_(std::move(base)), options_(std::move(options)),
       min_frames_(std::max(min_frames, kSelectionMinFrames)), requested_(request_first),
-      status_(request_first ? "pending" : "idle") {}
+      state_(request_first ? State::kPending : State::kIdle) {}
 
 void StructureJob::request() {
   std::lock_guard<std::mutex> lock(mutex_);
   requested_ = true;
-  if (status_ != "running") status_ = "pending";
+  if (state_ != State::kRunning) state_ = State::kPending;
 }
 
 bool StructureJob::pending() const {
@@ -31,7 +31,7 @@ std::optional<StructureResult> StructureJob::runIfDue(const Trajectory& window) 
     std::lock_guard<std::mutex> lock(mutex_);
     if (!requested_ || window.numFrames() < min_frames_) return std::nullopt;
     requested_ = false;
-    status_ = "running";
+    state_ = State::kRunning;
   }
   try {
     StructureResult result = selectStructure(base_, window, options_);
@@ -39,22 +39,35 @@ std::optional<StructureResult> StructureJob::runIfDue(const Trajectory& window) 
     for (const StructureCandidate& c : result.candidates)
       if (c.chosen) level = c.name;
     std::lock_guard<std::mutex> lock(mutex_);
-    status_ = requested_ ? "pending" : "chosen:" + level;
+    state_ = requested_ ? State::kPending : State::kChosen;
+    level_ = level;
     ++selections_;
     last_cut_ = result.stopped_by_time;
     error_.clear();
     return result;
   } catch (const std::exception& e) {
     std::lock_guard<std::mutex> lock(mutex_);
-    status_ = requested_ ? "pending" : "failed";
+    state_ = requested_ ? State::kPending : State::kFailed;
     error_ = e.what();
     return std::nullopt;
   }
 }
 
+StructureJob::State StructureJob::state() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return state_;
+}
+
 std::string StructureJob::status() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return status_;
+  switch (state_) {
+    case State::kIdle: return "idle";
+    case State::kPending: return "pending";
+    case State::kRunning: return "running";
+    case State::kChosen: return "chosen:" + level_;
+    case State::kFailed: return "failed";
+  }
+  return "?";
 }
 
 bool StructureJob::lastCut() const {

@@ -403,7 +403,7 @@ void EstimatorNode::onStatsTimer(const ros::WallTimerEvent&) {
     stats.structure = structure_->status();
     stats.structure_selections = structure_->selections();
     stats.structure_cut = structure_->lastCut();
-    if (stats.structure == "failed") stats.structure_error = structure_->lastError();
+    if (structure_->state() == StructureJob::State::kFailed) stats.structure_error = structure_->lastError();
   }
   std_msgs::String msg;
   msg.data = formatStats(stats);
@@ -435,7 +435,7 @@ void EstimatorNode::structureLoop() {
     ROS_INFO("estimator_node: choosing the structure on a window of %d frames", window.numFrames());
     const std::optional<StructureResult> r = structure_->runIfDue(window);
     if (!r) {
-      if (structure_->status() == "failed")
+      if (structure_->state() == StructureJob::State::kFailed)
         ROS_ERROR("estimator_node: structure selection failed: %s (the next ~reset tries again)",
                   structure_->lastError().c_str());
       continue;
@@ -488,9 +488,9 @@ void EstimatorNode::bagLoop() {
       // and the chosen model's first update are waited for (a failed selection: frames go on).
       while (update_stats_.updates() == before && !stop_ && ros::ok()) {
         if (structure_) {
-          const std::string state = structure_->status();
-          if (state == "failed") break;
-          if (state == "pending" && t + 1 < structure_->minFrames()) break;
+          const StructureJob::State state = structure_->state();
+          if (state == StructureJob::State::kFailed) break;
+          if (state == StructureJob::State::kPending && t + 1 < structure_->minFrames()) break;
         }
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
       }

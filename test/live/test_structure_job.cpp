@@ -64,6 +64,7 @@ TEST(StructureJob, AnUnusableWindowFailsWithTheReason) {
   EXPECT_EQ(job.minFrames(), 35);  // selection's own minimum
   EXPECT_FALSE(job.runIfDue(data).has_value());
   EXPECT_EQ(job.status(), "failed");
+  EXPECT_EQ(job.state(), mme::StructureJob::State::kFailed);
   EXPECT_NE(job.lastError().find("candidate"), std::string::npos) << job.lastError();
   EXPECT_EQ(job.selections(), 0u);
 }
@@ -79,6 +80,7 @@ TEST(StructureJob, ACutSelectionOnTheCrashWindowChoosesAndIsFlagged) {
   const std::optional<mme::StructureResult> r = job.runIfDue(data);
   ASSERT_TRUE(r.has_value()) << job.lastError();
   EXPECT_EQ(job.status(), "chosen:springs");
+  EXPECT_EQ(job.state(), mme::StructureJob::State::kChosen);
   EXPECT_TRUE(job.lastCut());
   EXPECT_TRUE(r->stopped_by_time);
   EXPECT_FALSE(r->model.bonds.empty());

@@ -16,6 +16,8 @@ namespace mme {
 
 class StructureJob {
  public:
+  enum class State { kIdle, kPending, kRunning, kChosen, kFailed };
+
   /// `min_frames`: the window length a selection waits for (at least the 35 frames selection
   /// needs: 20 fitted, 15 held out). `request_first`: the first selection is requested now
   /// (else on the first request()).
@@ -28,8 +30,9 @@ class StructureJob {
   /// from one thread). Returns the result, or nothing when it did not run or failed (status()
   /// then says why).
   std::optional<StructureResult> runIfDue(const Trajectory& window);
-  /// "idle" (nothing requested yet), "pending", "running", "chosen:<level>", "failed"
-  /// (thread-safe), for ~stats.
+  /// kIdle (nothing requested yet), kPending, kRunning, kChosen, kFailed (thread-safe).
+  State state() const;
+  /// The state as ~stats names it: "idle", "pending", "running", "chosen:<level>", "failed".
   std::string status() const;
   std::string lastError() const;
   int minFrames() const { return min_frames_; }
@@ -44,7 +47,8 @@ class StructureJob {
   int min_frames_;
   mutable std::mutex mutex_;
   bool requested_ = true;
-  std::string status_ = "pending";
+  State state_ = State::kPending;
+  std::string level_;  ///< the level the last selection chose
   std::string error_;
   uint32_t selections_ = 0;
   bool last_cut_ = false;
