@@ -365,10 +365,15 @@ Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
       for (int j = 0; j < u; ++j) kr(i, j) = inv(k[i], r[j]);
       for (int j = 0; j < n; ++j) kk(i, j) = inv(k[i], k[j]);
     }
-    const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> rr_cod(rr);
-    const Eigen::MatrixXd w = rr_cod.solve(kr.transpose());  // inv_RR^-1 inv_RK
-    theta_s = tk - kr * rr_cod.solve(tr);
-    inv = kk - kr * w;
+    if (n > 0) {  // (every column going leaves nothing to downdate: Eigen has no empty solve)
+      const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> rr_cod(rr);
+      const Eigen::MatrixXd w = rr_cod.solve(kr.transpose());  // inv_RR^-1 inv_RK
+      theta_s = tk - kr * rr_cod.solve(tr);
+      inv = kk - kr * w;
+    } else {
+      theta_s.resize(0);
+      inv.resize(0, 0);
+    }
     scale = sk;
     std::vector<int> kept_cols;
     position.clear();
