@@ -30,8 +30,9 @@ std::string validateOptions(const OnlineEstimatorOptions& o) {
 
 namespace {
 /// [s] a frame further than this (or 10 frame intervals) from the previous one starts a new
-/// window: see addFrame.
+/// window: see isClockJump.
 constexpr double kClockJumpS = 1.0;
+constexpr double kClockJumpFrameIntervals = 10.0;
 
 void checkModel(const Model& model, bool allow_no_free_parameter) {
   const std::string bad = validateModel(model);
@@ -150,8 +151,7 @@ std::string OnlineEstimator::addFrame(double time_s, const std::vector<Eigen::Ve
     // population lives on). Smaller steps back are reordered or duplicated frames.
     const double last_step =
         times_s_.size() >= 2 ? times_s_.back() - times_s_[times_s_.size() - 2] : 0.0;
-    const double jump_s = std::max(kClockJumpS, 10.0 * last_step);
-    if (std::fabs(time_s - times_s_.back()) > jump_s) {
+    if (isClockJump(time_s - times_s_.back(), last_step)) {
       times_s_.clear();
       positions_.clear();
       occluded_.clear();
@@ -409,6 +409,11 @@ bool OnlineEstimator::update() {
   std::lock_guard<std::mutex> estimate_lock(estimate_mutex_);
   estimate_ = std::move(e);
   return true;
+}
+
+bool OnlineEstimator::isClockJump(double step_s, double interval_s) {
+  if (step_s >= 0.0) return step_s > std::max(kClockJumpS, kClockJumpFrameIntervals * interval_s);
+  return -step_s > (interval_s > 0.0 ? kClockJumpFrameIntervals * interval_s : kClockJumpS);
 }
 
 bool OnlineEstimator::modelChangedSince(uint64_t version) const {

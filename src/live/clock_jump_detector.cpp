@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "motion_model_estimation/identification/online_estimator.h"
+
 namespace mme {
 
 std::optional<double> ClockJumpDetector::onAcceptedFrame(double time_s) {
@@ -12,8 +14,7 @@ std::optional<double> ClockJumpDetector::onAcceptedFrame(double time_s) {
   if (frames_ > 0) {
     // OnlineEstimator::addFrame: the interval is 0 while the window holds a single frame.
     const double step_s = frames_ >= 2 ? step_s_ : 0.0;
-    const double threshold_s = std::max(kMinJumpS, kJumpFrameIntervals * step_s);
-    if (std::fabs(time_s - last_s_) > threshold_s) jump = time_s - last_s_;
+    if (OnlineEstimator::isClockJump(time_s - last_s_, step_s)) jump = time_s - last_s_;
   }
   if (jump) {
     ++jumps_;

@@ -118,6 +118,24 @@ TEST_F(Fixture, ClockJumpStartsANewWindowAndKeepsTheModel) {
   EXPECT_EQ(e.counters().rejected_time, 0u);
 }
 
+// A bag shorter than a second played with --loop steps back by less than a second at every
+// loop: a new window each time, not a stream of "reordered" frames lost after the first loop.
+// A frame a couple of intervals late is still a reordered one.
+TEST_F(Fixture, AShortLoopingBagStartsANewWindowAtEveryLoop) {
+  mme::OnlineEstimator e(model, options());
+  for (int loop = 0; loop < 3; ++loop)
+    for (int t = 0; t < 40; ++t) {
+      ASSERT_EQ(e.addFrame(0.01 * t, frame(t), {}), "") << "loop " << loop << " frame " << t;
+      if (loop > 0 && t == 0) {
+        EXPECT_EQ(e.window().numFrames(), 1) << "a new window at the loop";
+      }
+    }
+  EXPECT_EQ(e.counters().accepted, 120u);
+  EXPECT_EQ(e.counters().rejected_time, 0u);
+  EXPECT_NE(e.addFrame(0.37, frame(37), {}), "");  // 2 intervals late: reordered
+  EXPECT_EQ(e.window().numFrames(), 40);
+}
+
 }  // namespace
 
 // The node's services and marker building read the model while a worker thread runs update().

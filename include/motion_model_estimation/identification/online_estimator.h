@@ -130,6 +130,12 @@ class OnlineEstimator {
   /// motion (fillFromNeighbours, later frames of the window too). Empty when the window is too
   /// short, is not the model's particles, or a hidden free particle cannot be placed.
   static Trajectory rollout(const Model& model, const Trajectory& window, int frames);
+  /// Whether a frame `step_s` [s] after the previous one (either sign) starts a new window
+  /// (addFrame's rule). Forward: beyond max(1 s, 10 frame intervals), a pause (shorter gaps are
+  /// dropped frames). Backward: beyond 10 frame intervals, a looping bag or a restarted capture
+  /// (a reordered or duplicated frame is a few intervals late at most; one topic's frames come
+  /// in order); 1 s while the interval is unknown (`interval_s` 0: one frame in the window).
+  static bool isClockJump(double step_s, double interval_s);
 
  private:
   Trajectory snapshotLocked() const;

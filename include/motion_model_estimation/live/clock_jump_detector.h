@@ -1,8 +1,8 @@
 // Tells, for each frame the OnlineEstimator accepted, whether the input clock jumped there (a
 // looping bag, a restarted capture, a pause) so that the estimator started a new window with
-// it, and counts those jumps for ~stats. The rule is the estimator's own (a frame further than
-// max(1 s, 10 frame intervals of its window) from the previous one), mirrored here because the
-// estimator does not report the restart; test_clock_jump_detector checks that both agree.
+// it, and counts those jumps for ~stats. The rule is the estimator's own
+// (OnlineEstimator::isClockJump), applied here to the accepted frames because the estimator does
+// not report the restart; test_clock_jump_detector checks that both agree.
 // Thread-safe. No ROS here.
 #pragma once
 
@@ -15,9 +15,6 @@ namespace mme {
 
 class ClockJumpDetector {
  public:
-  static constexpr double kMinJumpS = 1.0;         ///< [s] never a jump below this
-  static constexpr double kJumpFrameIntervals = 10.0;  ///< ... nor below this many intervals
-
   /// A frame stamped `time_s` [s] was accepted by the estimator. Returns the jump [s] (this
   /// frame's time minus the previous accepted frame's, either sign) when the estimator's window
   /// restarted with this frame, else nothing.
