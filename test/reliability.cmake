@@ -15,5 +15,5 @@ endif()
 
 # structure_sweep: structure selection on windows of the real captures (scripts/sweep-structure,
 # test/cli/test_structure_sweep.sh, and scripts/test --sanitize under the sanitizers).
-add_executable(structure_sweep test/reliability/structure_sweep.cpp)
+add_executable(structure_sweep test/reliability/structure_sweep.cpp src/tools/cli_args.cpp)
 target_link_libraries(structure_sweep ${MME_LIBS})

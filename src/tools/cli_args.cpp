@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <sstream>
 
 #include "motion_model_estimation/core/error.h"
 
@@ -66,6 +67,22 @@ int runTool(const char* tool, int (*run)(int, char**), int argc, char** argv) {
     std::fprintf(stderr, "%s: error: %s\n", tool, e.what());
     return 1;
   }
+}
+
+std::vector<int> parseCountList(const std::string& text, const std::string& option, long max,
+                                const std::string& example) {
+  std::vector<int> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    char* end = nullptr;
+    const long k = std::strtol(item.c_str(), &end, 10);
+    if (item.empty() || *end != '\0' || k < 1 || k > max)
+      throw InputError(option + ": '" + item + "' is not a frame count >= 1 (e.g. " + example + ")");
+    out.push_back(static_cast<int>(k));
+  }
+  if (out.empty()) throw InputError(option + ": empty (e.g. " + example + ")");
+  return out;
 }
 
 }  // namespace mme

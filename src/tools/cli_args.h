@@ -4,6 +4,7 @@
 #include <map>
 #include <set>
 #include <string>
+#include <vector>
 
 namespace mme {
 
@@ -23,6 +24,11 @@ class CliArgs {
  private:
   std::map<std::string, std::string> values_;
 };
+
+/// A comma-separated list of frame counts in [1, max] given to `option` (e.g. "--horizons");
+/// throws InputError naming the option, the bad item and `example` otherwise.
+std::vector<int> parseCountList(const std::string& text, const std::string& option, long max,
+                                const std::string& example);
 
 /// A tool's main(): runs `run` and turns exceptions into one line on stderr prefixed by the
 /// tool's name, exit code 2 for bad input (InputError), 1 for anything else.

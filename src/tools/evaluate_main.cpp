@@ -22,21 +22,6 @@ const char* kUsage =
     "--history H: the H frames before --first-frame are read as history: no prediction starts\n"
     "there, but they place a marker hidden at a start (e.g. the frames a model was fitted on).\n";
 
-std::vector<int> parseHorizons(const std::string& text) {
-  std::vector<int> out;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    char* end = nullptr;
-    const long k = std::strtol(item.c_str(), &end, 10);
-    if (item.empty() || *end != '\0' || k < 1 || k > 100000)
-      throw mme::InputError("--horizons: '" + item + "' is not a frame count >= 1 (e.g. 1,5,10)");
-    out.push_back(static_cast<int>(k));
-  }
-  if (out.empty()) throw mme::InputError("--horizons: empty (e.g. 1,5,10)");
-  return out;
-}
-
 int run(int argc, char** argv) {
   mme::CliArgs args(argc, argv,
                     {"model", "trajectory", "topic", "first-frame", "frames", "history", "horizons", "csv"},
@@ -47,7 +32,7 @@ int run(int argc, char** argv) {
   }
   for (const char* required : {"model", "trajectory"})
     if (!args.has(required)) throw mme::InputError(std::string("--") + required + " is required");
-  const std::vector<int> horizons = parseHorizons(args.get("horizons", "1,5,10"));
+  const std::vector<int> horizons = mme::parseCountList(args.get("horizons", "1,5,10"), "--horizons", 100000, "1,5,10");
   const std::string model_path = args.get("model");
   mme::Model model = mme::loadModelFile(model_path);
   for (const mme::ParamRef& ref : mme::freeParameters(model))

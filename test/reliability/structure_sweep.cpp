@@ -16,10 +16,10 @@
 #include <cstdlib>
 #include <exception>
 #include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
+#include "../../src/tools/cli_args.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/identification/marker_model.h"
 #include "motion_model_estimation/identification/structure_selection.h"
@@ -35,21 +35,6 @@ struct Options {
   std::vector<std::string> captures;
 };
 
-std::vector<int> parseList(const std::string& text) {
-  std::vector<int> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    char* end = nullptr;
-    const long v = std::strtol(item.c_str(), &end, 10);
-    if (item.empty() || *end != '\0' || v < 1 || v > 1000000)
-      throw mme::InputError("--lengths: '" + item + "' is not a frame count >= 1");
-    out.push_back(static_cast<int>(v));
-  }
-  if (out.empty()) throw mme::InputError("--lengths: no length given");
-  return out;
-}
-
 Options parseArgs(int argc, char** argv) {
   Options o;
   for (int i = 1; i < argc; ++i) {
@@ -64,9 +49,9 @@ Options parseArgs(int argc, char** argv) {
       o.max_time_s = std::strtod(v.c_str(), &end);
       if (*end != '\0' || !(o.max_time_s >= 0.0)) throw mme::InputError("--max-time-s: '" + v + "' is not >= 0");
     } else if (a == "--lengths") {
-      o.lengths = parseList(value());
+      o.lengths = mme::parseCountList(value(), "--lengths", 1000000, "40,80,100,240");
     } else if (a == "--offsets") {
-      const std::vector<int> n = parseList(value());
+      const std::vector<int> n = mme::parseCountList(value(), "--offsets", 1000, "3");
       if (n.size() != 1) throw mme::InputError("--offsets takes one count");
       o.offsets = n[0];
     } else if (a == "--csv") {
