@@ -28,7 +28,7 @@
 
 #include "methods.h"
 #include "motion_model_estimation/core/error.h"
-#include "motion_model_estimation/identification/evolution_strategy.h"
+#include "motion_model_estimation/identification/search/evolution_strategy.h"
 #include "motion_model_estimation/scenes/random_object.h"
 #include "motion_model_estimation/scenes/scenes.h"
 #include "problem.h"

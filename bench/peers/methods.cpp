@@ -11,7 +11,7 @@
 #include <memory>
 #include <stdexcept>
 
-#include "motion_model_estimation/identification/evolution_strategy.h"
+#include "motion_model_estimation/identification/search/evolution_strategy.h"
 #include "motion_model_estimation/identification/identifier.h"
 
 #ifdef MME_HAVE_PAGMO

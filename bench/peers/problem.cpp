@@ -10,7 +10,7 @@
 #include <utility>
 
 #include "motion_model_estimation/core/error.h"
-#include "motion_model_estimation/identification/output_error.h"
+#include "motion_model_estimation/identification/estimators/output_error.h"
 #include "motion_model_estimation/scenes/random_object.h"
 
 namespace bench {

@@ -13,7 +13,7 @@
 #include "motion_model_estimation/core/random.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/core/trajectory.h"
-#include "motion_model_estimation/identification/parameter_space.h"
+#include "motion_model_estimation/identification/search/parameter_space.h"
 
 namespace bench {
 

@@ -12,8 +12,8 @@
 #include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/stiffness.h"
-#include "motion_model_estimation/identification/equation_error.h"
-#include "motion_model_estimation/identification/levenberg_marquardt.h"
+#include "motion_model_estimation/identification/estimators/equation_error.h"
+#include "motion_model_estimation/identification/search/levenberg_marquardt.h"
 
 namespace mme {
 

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "motion_model_estimation/identification/online_estimator.h"
+#include "motion_model_estimation/identification/online/online_estimator.h"
 
 namespace mme {
 

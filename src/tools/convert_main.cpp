@@ -8,7 +8,7 @@
 #include "cli_args.h"
 #include "trajectory_input.h"
 #include "motion_model_estimation/core/error.h"
-#include "motion_model_estimation/identification/marker_model.h"
+#include "motion_model_estimation/identification/structure/marker_model.h"
 #include "motion_model_estimation/io/model_yaml.h"
 #include "motion_model_estimation/io/trajectory_io.h"
 #include "motion_model_estimation/ros/trajectory_files.h"

@@ -10,7 +10,7 @@
 #include "cli_args.h"
 #include "trajectory_input.h"
 #include "motion_model_estimation/core/error.h"
-#include "motion_model_estimation/identification/prediction_error.h"
+#include "motion_model_estimation/identification/estimators/prediction_error.h"
 #include "motion_model_estimation/io/model_yaml.h"
 
 namespace {

@@ -12,10 +12,10 @@
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/muscle.h"
 #include "motion_model_estimation/identification/identifier.h"
-#include "motion_model_estimation/identification/marker_model.h"
-#include "motion_model_estimation/identification/muscle_placement.h"
-#include "motion_model_estimation/identification/sensor_muscles.h"
-#include "motion_model_estimation/identification/structure_selection.h"
+#include "motion_model_estimation/identification/structure/marker_model.h"
+#include "motion_model_estimation/identification/muscles/muscle_placement.h"
+#include "motion_model_estimation/identification/muscles/sensor_muscles.h"
+#include "motion_model_estimation/identification/structure/structure_selection.h"
 #include "motion_model_estimation/io/model_yaml.h"
 
 namespace {
@@ -166,7 +166,7 @@ int run(int argc, char** argv) {
   if (!model_path.empty()) model = mme::loadModelFile(model_path);
   const mme::Trajectory data = mme::readToolTrajectory("identify", trajectory_path, args.get("topic"));
   if (model_path.empty()) {
-    // No model: the markers are the particles (identification/marker_model.h).
+    // No model: the markers are the particles (identification/structure/marker_model.h).
     model = mme::markerModel(data);
     std::printf("identify: no --model: the %zu markers of %s are the particles (1 kg each, free "
                 "gravity); structure selection chooses every bond\n",

@@ -14,7 +14,7 @@
 #include "motion_model_estimation/core/model.h"
 #include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/trajectory.h"
-#include "motion_model_estimation/identification/prediction_error.h"
+#include "motion_model_estimation/identification/estimators/prediction_error.h"
 
 namespace mme {
 namespace test {

@@ -15,7 +15,7 @@
 
 #include "motion_model_estimation/MarkerFrame.h"
 #include "motion_model_estimation/core/error.h"
-#include "motion_model_estimation/identification/online_estimator.h"
+#include "motion_model_estimation/identification/online/online_estimator.h"
 #include "motion_model_estimation/io/model_yaml.h"
 #include "motion_model_estimation/live/marker_name_map.h"
 #include "motion_model_estimation/ros/conversions.h"

@@ -10,8 +10,8 @@
 
 #include "fuzz_common.h"
 #include "motion_model_estimation/core/error.h"
-#include "motion_model_estimation/identification/marker_model.h"
-#include "motion_model_estimation/identification/structure_selection.h"
+#include "motion_model_estimation/identification/structure/marker_model.h"
+#include "motion_model_estimation/identification/structure/structure_selection.h"
 #include "motion_model_estimation/io/trc.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

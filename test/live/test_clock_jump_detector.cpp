@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "motion_model_estimation/identification/online_estimator.h"
+#include "motion_model_estimation/identification/online/online_estimator.h"
 #include "motion_model_estimation/io/model_yaml.h"
 #include "motion_model_estimation/live/clock_jump_detector.h"
 

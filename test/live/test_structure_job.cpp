@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "motion_model_estimation/core/simulator.h"
-#include "motion_model_estimation/identification/marker_model.h"
+#include "motion_model_estimation/identification/structure/marker_model.h"
 #include "motion_model_estimation/io/trajectory_io.h"
 #include "motion_model_estimation/live/structure_job.h"
 #include "motion_model_estimation/scenes/random_object.h"

@@ -21,8 +21,8 @@
 
 #include "../../src/tools/cli_args.h"
 #include "motion_model_estimation/core/error.h"
-#include "motion_model_estimation/identification/marker_model.h"
-#include "motion_model_estimation/identification/structure_selection.h"
+#include "motion_model_estimation/identification/structure/marker_model.h"
+#include "motion_model_estimation/identification/structure/structure_selection.h"
 #include "motion_model_estimation/io/trajectory_io.h"
 
 namespace {

@@ -14,7 +14,7 @@
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
-#include "motion_model_estimation/identification/online_estimator.h"
+#include "motion_model_estimation/identification/online/online_estimator.h"
 #include "motion_model_estimation/io/model_yaml.h"
 
 namespace {

@@ -9,8 +9,8 @@
 
 #include "motion_model_estimation/core/model.h"
 #include "motion_model_estimation/core/trajectory.h"
-#include "motion_model_estimation/identification/evolution_strategy.h"
-#include "motion_model_estimation/identification/output_error.h"
+#include "motion_model_estimation/identification/search/evolution_strategy.h"
+#include "motion_model_estimation/identification/estimators/output_error.h"
 
 namespace mme {
 

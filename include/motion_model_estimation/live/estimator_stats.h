@@ -8,8 +8,8 @@
 #include <optional>
 #include <string>
 
-#include "motion_model_estimation/identification/online_estimator.h"
-#include "motion_model_estimation/identification/prediction_error.h"
+#include "motion_model_estimation/identification/online/online_estimator.h"
+#include "motion_model_estimation/identification/estimators/prediction_error.h"
 #include "motion_model_estimation/live/latency_stats.h"
 #include "motion_model_estimation/live/update_gap_stats.h"
 

@@ -10,7 +10,7 @@
 
 #include "motion_model_estimation/core/model.h"
 #include "motion_model_estimation/core/trajectory.h"
-#include "motion_model_estimation/identification/structure_selection.h"
+#include "motion_model_estimation/identification/structure/structure_selection.h"
 
 namespace mme {
 

@@ -15,7 +15,7 @@
 
 #include "motion_model_estimation/core/model.h"
 #include "motion_model_estimation/core/trajectory.h"
-#include "motion_model_estimation/identification/online_estimator.h"
+#include "motion_model_estimation/identification/online/online_estimator.h"
 
 namespace mme {
 

@@ -24,7 +24,7 @@
 #include "motion_model_estimation/ExportModel.h"
 #include "motion_model_estimation/LoadModel.h"
 #include "motion_model_estimation/MarkerFrame.h"
-#include "motion_model_estimation/identification/online_estimator.h"
+#include "motion_model_estimation/identification/online/online_estimator.h"
 #include "motion_model_estimation/live/clock_jump_detector.h"
 #include "motion_model_estimation/live/latency_stats.h"
 #include "motion_model_estimation/live/marker_name_map.h"
