@@ -363,7 +363,7 @@ void accuracyExperiment(const Settings& s) {
       medians.push_back(r.errors.median);
       maxima.push_back(r.errors.max);
       std::fprintf(f, "%g,%d,%s,%.6g,%.6g,%.6g,%.6g,%d,%zu,%.4g,%.4g,%.3f\n", noise, seed,
-                   r.result.estimator.c_str(), r.errors.median, r.errors.max, b.median, b.max,
+                   mme::estimatorName(r.result.estimator), r.errors.median, r.errors.max, b.median, b.max,
                    run_within, truth.size(), ratio, r.result.noise_estimate_m, r.result.wall_time_s);
       std::fflush(f);
     }
@@ -443,12 +443,12 @@ void onlineExperiment(const Settings& s) {
     const mme::IdentifyResult r = mme::identifyModel(model, window, io);
     const double ratio = e.global_cost / r.global_cost;
     std::fprintf(f, "%s,%d,%zu,%d,%s,%.6g,%s,%.6g,%.4g,%d,%.2f\n", c.name.c_str(), n,
-                 r.parameters.size(), window.numFrames(), e.estimator.c_str(), e.global_cost,
-                 r.estimator.c_str(), r.global_cost, ratio, updates, r.wall_time_s);
+                 r.parameters.size(), window.numFrames(), mme::estimatorName(e.estimator), e.global_cost,
+                 mme::estimatorName(r.estimator), r.global_cost, ratio, updates, r.wall_time_s);
     std::fflush(f);
     std::printf("online: %s (%d markers, %zu unknowns): online %s cost %.4g m^2, identify %s cost "
                 "%.4g m^2 on the same %d frames: ratio %.3g (%d updates)\n", c.name.c_str(), n,
-                r.parameters.size(), e.estimator.c_str(), e.global_cost, r.estimator.c_str(),
+                r.parameters.size(), mme::estimatorName(e.estimator), e.global_cost, mme::estimatorName(r.estimator),
                 r.global_cost, window.numFrames(), ratio, updates);
   }
   std::fclose(f);
@@ -755,12 +755,12 @@ void walkerIdentify(const Settings& s) {
   const mme::IdentifyResult r = mme::identifyModel(start, walker.data, o);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
   const WalkerScore score = scoreWalker(walker.scene.model, walker.data, r.values);
-  std::fprintf(f, "%d,%d,%s,%.1f,%d,%.6g,%.6g,%s,%.6g\n", walker.frames, o.generations, r.estimator.c_str(),
+  std::fprintf(f, "%d,%d,%s,%.1f,%d,%.6g,%.6g,%s,%.6g\n", walker.frames, o.generations, mme::estimatorName(r.estimator),
                wall_s, score.within_1pct, score.median_error, score.worst_error, score.worst_name.c_str(),
                score.open_loop_rms_m);
   std::fclose(f);
   std::printf("walker_identify: %s, %.0f s: %d of %zu parameters within 1 %%, median %.3g %%, worst "
-              "%.3g %% (%s); open loop after 1 s %.3g m RMS\n", r.estimator.c_str(), wall_s,
+              "%.3g %% (%s); open loop after 1 s %.3g m RMS\n", mme::estimatorName(r.estimator), wall_s,
               score.within_1pct, walker.refs.size(), 100.0 * score.median_error, 100.0 * score.worst_error,
               score.worst_name.c_str(), score.open_loop_rms_m);
 }

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "motion_model_estimation/core/model_builder.h"
 #include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/scenes/scenes.h"
@@ -29,63 +30,31 @@ namespace {
 using mme::Model;
 using Vec = Eigen::Vector3d;
 
-mme::Param fixedValue(double v) {
-  mme::Param p;
-  p.present = p.has_value = true;
-  p.value = v;
-  return p;
-}
-mme::Param freeValue(double v) {
-  mme::Param p = fixedValue(v);
-  p.free = true;
-  p.has_min = p.has_max = true;
-  p.min = v / 10.0;
-  p.max = v * 10.0;
-  return p;
-}
-
-int addParticle(Model* m, const Vec& x, bool fixed, const std::string& group = "",
-                const Vec& v = Vec::Zero(), double mass_kg = 1.0) {
-  mme::Particle p;
-  p.name = "p" + std::to_string(m->particles.size());
-  p.position_m = x;
-  p.velocity_mps = v;
-  p.fixed = fixed;
-  p.group = group;
-  p.mass_kg = mass_kg;
-  m->particles.push_back(p);
-  return static_cast<int>(m->particles.size()) - 1;
-}
-
-void addBond(Model* m, int type, int a, int b) {
-  mme::Bond bond;
-  bond.type = type;
-  bond.particles = {{a, b, -1}};
-  m->bonds.push_back(bond);
-}
+/// A free parameter with bounds [v/10, 10 v].
+mme::Param freeValue(double v) { return mme::boundedParam(v, v / 10.0, v * 10.0); }
 
 /// Square cloth of side n, period 1/(n-1)... in metres; spring types added by the caller.
 /// `types`: struct_h, struct_v, shear_d1, shear_d2, flex_h, flex_v (-1 = not installed).
 Model clothModel(int n, double period_m, const int* types, bool flexion) {
   Model m;
   m.frame_rate_hz = 100.0;
-  m.gravity_mps2[2] = fixedValue(-9.81);
+  m.gravity_mps2[2] = mme::valueParam(-9.81);
   const double mass = 0.1 / (n * n);
   for (int r = 0; r < n; ++r)
     for (int c = 0; c < n; ++c)
-      addParticle(&m, Vec(c * period_m, -r * period_m, 0.0), r == 0 && (c == 0 || c == n - 1),
-                  "", Vec::Zero(), mass);
+      mme::addParticle(&m, Vec(c * period_m, -r * period_m, 0.0),
+                       {"", mass, Vec::Zero(), r == 0 && (c == 0 || c == n - 1)});
   auto id = [n](int r, int c) { return r * n + c; };
   for (int r = 0; r < n; ++r)
     for (int c = 0; c < n; ++c) {
-      if (c + 1 < n) addBond(&m, types[0], id(r, c), id(r, c + 1));
-      if (r + 1 < n) addBond(&m, types[1], id(r, c), id(r + 1, c));
+      if (c + 1 < n) mme::addBond(&m, types[0], id(r, c), id(r, c + 1));
+      if (r + 1 < n) mme::addBond(&m, types[1], id(r, c), id(r + 1, c));
       if (r + 1 < n && c + 1 < n) {
-        addBond(&m, types[2], id(r, c), id(r + 1, c + 1));
-        addBond(&m, types[3], id(r, c + 1), id(r + 1, c));
+        mme::addBond(&m, types[2], id(r, c), id(r + 1, c + 1));
+        mme::addBond(&m, types[3], id(r, c + 1), id(r + 1, c));
       }
-      if (flexion && c + 2 < n) addBond(&m, types[4], id(r, c), id(r, c + 2));
-      if (flexion && r + 2 < n) addBond(&m, types[5], id(r, c), id(r + 2, c));
+      if (flexion && c + 2 < n) mme::addBond(&m, types[4], id(r, c), id(r, c + 2));
+      if (flexion && r + 2 < n) mme::addBond(&m, types[5], id(r, c), id(r + 2, c));
     }
   return m;
 }
@@ -97,7 +66,7 @@ mme::BondType springType(const std::string& name, double k, double rest, double 
   t.kind = mme::BondKind::kSpring;
   t.param(mme::kStiffness) = freeValue(k);
   t.param(mme::kRestLength) = freeValue(rest);
-  if (damping > 0) t.param(mme::kDamping) = fixedValue(damping);
+  if (damping > 0) t.param(mme::kDamping) = mme::valueParam(damping);
   if (k_nl > 0) t.param(mme::kStiffnessNl) = freeValue(k_nl);
   if (clamped) t.param(mme::kMaxElongation) = freeValue(0.1);
   return t;
@@ -124,17 +93,17 @@ Model inCodeFluid() {
   m.frame_rate_hz = 25.0;
   m.substeps = 10;
   for (int r = 0; r < 15; ++r)
-    for (int c = 0; c < 20; ++c) addParticle(&m, Vec(c, r, 0), false, "gas");
+    for (int c = 0; c < 20; ++c) mme::addParticle(&m, Vec(c, r, 0), {"", 1.0, Vec::Zero(), false, "gas"});
   for (int c = 0; c < 20; ++c)
     for (int w = 0; w < 3; ++w)
-      addParticle(&m, Vec(-1.5 - c, 6.0 + w, 0), false, "jet", Vec(10, 0, 0));
+      mme::addParticle(&m, Vec(-1.5 - c, 6.0 + w, 0), {"", 1.0, Vec(10, 0, 0), false, "jet"});
   auto type = [&](const std::string& name, double k, double rest, double c, double c_nl,
                   double max_d) {
     mme::BondType t;
     t.name = name;
     t.kind = mme::BondKind::kSpring;
     if (k > 0) t.param(mme::kStiffness) = freeValue(k);
-    if (rest > 0) t.param(mme::kRestLength) = fixedValue(rest);
+    if (rest > 0) t.param(mme::kRestLength) = mme::valueParam(rest);
     if (c > 0) t.param(mme::kDamping) = freeValue(c);
     if (c_nl > 0) t.param(mme::kDampingNl) = freeValue(c_nl);
     t.param(mme::kMaxDistance) = freeValue(max_d);

@@ -116,7 +116,7 @@ std::string brief(const std::vector<RunResult>& runs) {
     s += " " + r.method + ":";
     if (!r.applicable) s += "n/a";
     else s += num(r.errors.max, "%.2g") + "%/" + num(r.wall_s, "%.1f") + "s" +
-              (r.estimator == "output_error" ? "/oe" : "");
+              (r.estimator == mme::Estimator::kOutputError ? "/oe" : "");
   }
   return s;
 }
@@ -260,7 +260,7 @@ void speedAccuracy(const Settings& s, const std::vector<std::string>& methods) {
                  num(r.errors.median).c_str(), num(r.errors.max).c_str(), num(r.cost).c_str(),
                  ms(r.to_1pct, true).c_str(), ms(r.to_1pct, false).c_str(), ms(r.to_001pct, true).c_str(),
                  ms(r.to_001pct, false).c_str(), r.generations, r.restarts, r.bounded ? 1 : 0,
-                 r.estimator.empty() ? "n/a" : r.estimator == "output_error" ? "1" : "0",
+                 !r.estimator ? "n/a" : *r.estimator == mme::Estimator::kOutputError ? "1" : "0",
                  r.substeps > 0 ? r.substeps : p.model.substeps, clean(r.note).c_str());
     for (const bench::TracePoint& t : r.trace)
       std::fprintf(trace, "%s,%s,%d,%llu,%.5f,%.6g,%.6g,%.6g\n", scene.c_str(), r.method.c_str(), seed,
@@ -426,7 +426,7 @@ void stabilityMap(const Settings& s, const std::vector<std::string>& methods) {
     for (double b : finite) p_efficient *= std::erf(1.0 / (std::sqrt(2.0) * b));
     for (const std::string& axis : axes)
       for (const RunResult& r : results[j]) {
-        const bool pipeline = !r.estimator.empty();
+        const bool pipeline = r.estimator.has_value();
         const double eff = r.applicable ? bench::medianEfficiency(r.values, truth[j], bound_pct[j]) : NAN;
         std::fprintf(f, "%s,%g,%d,%s,%zu,%d,%d,%s,%s,%llu,%.4f,%d,%lld,%d,%s,%s,%s,%s,%d,%s,%s,%s,%s,%d,%s\n", axis.c_str(),
                      instances[j].value, instances[j].seed, r.method.c_str(), unknowns[j],
@@ -436,7 +436,7 @@ void stabilityMap(const Settings& s, const std::vector<std::string>& methods) {
                      r.to_1pct.reached ? r.to_1pct.generations : -1,
                      r.to_1pct.reached ? static_cast<long long>(r.to_1pct.evaluations) : -1LL,
                      r.bounded ? 1 : 0, num(b_med).c_str(), num(b_max).c_str(), num(eff).c_str(),
-                     pipeline ? (r.estimator == "output_error" ? "1" : "0") : "n/a",
+                     pipeline ? (*r.estimator == mme::Estimator::kOutputError ? "1" : "0") : "n/a",
                      r.substeps > 0 ? r.substeps : substeps[j],
                      pipeline ? num(r.noise_estimate_m).c_str() : "n/a",
                      r.residual_std_m >= 0.0 ? num(r.residual_std_m).c_str() : "n/a", num(p_efficient).c_str(),

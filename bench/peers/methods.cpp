@@ -13,6 +13,7 @@
 
 #include "motion_model_estimation/identification/search/evolution_strategy.h"
 #include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/identification/estimators/equation_error.h"
 
 #ifdef MME_HAVE_PAGMO
 #include <pagmo/algorithm.hpp>
@@ -267,7 +268,7 @@ RunResult runDefault(const Problem& p, uint64_t seed, const Budget& budget, bool
   r.estimator = result.estimator;
   r.substeps = result.substeps;
   r.noise_estimate_m = result.noise_estimate_m;
-  if (result.estimator == "output_error") r.residual_std_m = result.noise_std_m;
+  if (result.estimator == mme::Estimator::kOutputError) r.residual_std_m = result.noise_std_m;
   for (mme::ParameterFlag f : result.flags) r.flagged += f != mme::ParameterFlag::kNone;
   for (auto [ms, threshold] : {std::make_pair(&r.to_1pct, 1.0), std::make_pair(&r.to_001pct, 0.01)})
     if (r.errors.max < threshold) {
@@ -279,7 +280,7 @@ RunResult runDefault(const Problem& p, uint64_t seed, const Budget& budget, bool
   if (keep_trace) push(r.evaluations, r.wall_s, r.cost, r.values);
   char note[256];
   std::snprintf(note, sizeof(note), "final answer: %s; stop %s; substeps %d; noise estimate %.2g m; "
-                "%d widening(s); %d flagged", result.estimator.c_str(), mme::identifyStopName(result.stop),
+                "%d widening(s); %d flagged", mme::estimatorName(result.estimator), mme::identifyStopName(result.stop),
                 result.substeps, result.noise_estimate_m, result.bound_widenings, r.flagged);
   r.note = note;
   return r;
@@ -507,121 +508,22 @@ RunResult runLls(const Problem& p, const Budget& budget) {
 }  // namespace
 
 bool solveEquationError(const Problem& p, std::vector<double>* values, std::string* why) {
+  // The peer "LLS" is the paper's linear least squares on linear springs (llsVerdict, problem.cpp);
+  // the solve is the library's equation error (estimators/equation_error.h).
   if (!p.lls_applicable) {
     *why = p.lls_reason;
     return false;
   }
-  const mme::Model& m = p.model;
-  const mme::Trajectory& d = p.data;
-  const double h = 1.0 / m.frame_rate_hz;
-  const std::vector<mme::ParamRef> refs = p.space->refs();
-  const int num_types = static_cast<int>(m.bond_types.size());
-  // Columns: per spring type k (or k when L is fixed: coefficient (l - L)), kL, c.
-  struct Cols {
-    int k = -1, kl = -1, c = -1;
-  };
-  std::vector<Cols> cols(num_types);
-  int num_cols = 0;
-  for (int t = 0; t < num_types; ++t) {
-    const mme::BondType& type = m.bond_types[t];
-    if (type.kind != mme::BondKind::kSpring) continue;
-    if (type.param(mme::kStiffness).free) cols[t].k = num_cols++;
-    if (type.param(mme::kRestLength).free) cols[t].kl = num_cols++;
-    if (type.param(mme::kDamping).free) cols[t].c = num_cols++;
-  }
-  const int n = d.numMarkers();
-  std::vector<std::vector<std::pair<int, int>>> touching(n);  // (bond, +1 for a / -1 for b)
-  for (size_t b = 0; b < m.bonds.size(); ++b) {
-    const mme::Bond& bond = m.bonds[b];
-    if (m.bond_types[bond.type].kind == mme::BondKind::kViscosity) {
-      touching[bond.particles[0]].push_back({static_cast<int>(b), 0});
-    } else {
-      touching[bond.particles[0]].push_back({static_cast<int>(b), 1});
-      touching[bond.particles[1]].push_back({static_cast<int>(b), -1});
-    }
-  }
-  const Eigen::Vector3d g = m.gravity();
-  std::vector<Eigen::RowVectorXd> rows;
-  std::vector<double> rhs;
-  auto seen = [&d](int t, int i) { return !d.isOccluded(t, i); };
-  for (int t = 1; t + 1 < d.numFrames(); ++t) {
-    for (int i = 0; i < n; ++i) {
-      if (m.particles[i].fixed) continue;
-      bool ok = seen(t - 1, i) && seen(t, i) && seen(t + 1, i);
-      for (const auto& [b, sign] : touching[i]) {
-        if (!ok) break;
-        if (sign == 0) continue;
-        const int other = m.bonds[b].particles[sign > 0 ? 1 : 0];
-        ok = seen(t, other) && seen(t - 1, other);
-      }
-      if (!ok) continue;
-      const double mass = m.particles[i].mass_kg;
-      const double w = h * h / mass;
-      const Eigen::Vector3d acc =
-          (d.position(t + 1, i) - 2.0 * d.position(t, i) + d.position(t - 1, i)) / (h * h);
-      Eigen::Matrix3Xd a = Eigen::Matrix3Xd::Zero(3, num_cols);
-      Eigen::Vector3d known = mass * g;  // known forces
-      const Eigen::Vector3d vi = (d.position(t, i) - d.position(t - 1, i)) / h;
-      for (const auto& [b, sign] : touching[i]) {
-        const mme::Bond& bond = m.bonds[b];
-        const mme::BondType& type = m.bond_types[bond.type];
-        if (sign == 0) {  // fixed unary viscosity
-          known -= type.value(mme::kViscosity) * vi;
-          continue;
-        }
-        const int pa = bond.particles[0], pb = bond.particles[1];
-        const Eigen::Vector3d dx = d.position(t, pb) - d.position(t, pa);
-        const double l = dx.norm();
-        if (!(l > 0.0)) continue;
-        const Eigen::Vector3d u = dx / l;
-        const Eigen::Vector3d dv = (d.position(t, pb) - d.position(t - 1, pb) -
-                                    d.position(t, pa) + d.position(t - 1, pa)) / h;
-        const double s = dv.dot(u);
-        const Eigen::Vector3d su = sign * u;  // F_i += f * su
-        const Cols& c = cols[bond.type];
-        const double k = type.value(mme::kStiffness), rest = type.value(mme::kRestLength);
-        if (c.k >= 0 && c.kl >= 0) {
-          a.col(c.k) += l * su;
-          a.col(c.kl) -= su;
-        } else if (c.k >= 0) {
-          a.col(c.k) += (l - rest) * su;
-        } else if (c.kl >= 0) {
-          known += k * l * su;
-          a.col(c.kl) -= su;
-        } else {
-          known += k * (l - rest) * su;
-        }
-        if (c.c >= 0) a.col(c.c) += s * su;
-        else known += type.value(mme::kDamping) * s * su;
-      }
-      // residual = w (F - m a) = w (A x + known - m acc)
-      for (int r = 0; r < 3; ++r) {
-        rows.push_back(w * a.row(r));
-        rhs.push_back(w * (mass * acc[r] - known[r]));
-      }
-    }
-  }
-  if (static_cast<int>(rows.size()) < num_cols) {
-    *why = "too few usable equations";
+  const mme::EquationErrorResult solved = mme::solveEquationError(p.model, p.data);
+  if (!solved.applicable) {
+    *why = solved.reason;
     return false;
   }
-  Eigen::MatrixXd a(rows.size(), num_cols);
-  Eigen::VectorXd b(rows.size());
-  for (size_t r = 0; r < rows.size(); ++r) {
-    a.row(r) = rows[r];
-    b[r] = rhs[r];
+  if (solved.values.size() != p.space->refs().size()) {
+    *why = "the equation error's parameters are not the problem's";
+    return false;
   }
-  const Eigen::VectorXd x = a.colPivHouseholderQr().solve(b);
-  values->assign(refs.size(), std::numeric_limits<double>::quiet_NaN());
-  for (size_t k = 0; k < refs.size(); ++k) {
-    const int t = refs[k].bond_type;
-    const mme::BondType& type = m.bond_types[t];
-    const Cols& c = cols[t];
-    const double stiffness = c.k >= 0 ? x[c.k] : type.value(mme::kStiffness);
-    if (refs[k].param == mme::kStiffness) (*values)[k] = x[c.k];
-    else if (refs[k].param == mme::kRestLength) (*values)[k] = x[c.kl] / stiffness;
-    else if (refs[k].param == mme::kDamping) (*values)[k] = x[c.c];
-  }
+  *values = solved.values;
   return true;
 }
 

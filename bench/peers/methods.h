@@ -25,6 +25,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -75,7 +76,7 @@ struct RunResult {
   Milestone to_1pct, to_001pct;  ///< max error < 1 % and < 0.01 %
   bool bounded = false;           ///< long rollout of the answer stays bounded
   // `default` only (the identify pipeline's result; others keep these defaults):
-  std::string estimator;          ///< "short_term" | "output_error" ("" = not the pipeline)
+  std::optional<mme::Estimator> estimator;  ///< the pipeline's final cost (none: not the pipeline)
   int substeps = 0;               ///< integration steps per frame of the answer (0 = the problem's)
   double noise_estimate_m = -1.0; ///< the pipeline's marker-noise estimate (< 0 = not run)
   double residual_std_m = -1.0;   ///< output error: RMS residual per coordinate at its answer

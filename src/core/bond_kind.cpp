@@ -65,6 +65,46 @@ const char* paramKey(ParamId id) {
   return "?";
 }
 
+namespace {
+
+// Each parameter kind's facts, written down once; the switch has no default (-Werror=switch).
+ParamInfo makeParamInfo(ParamId id) {
+  //                     unit           log    positive length
+  switch (id) {
+    case kStiffness: return {id, paramKey(id), "N/m", true, true, false};
+    case kRestLength: return {id, paramKey(id), "m", true, true, true};
+    case kDamping: return {id, paramKey(id), "N s/m", true, true, false};
+    case kStiffnessNl: return {id, paramKey(id), "N/m^3", true, false, false};
+    case kDampingNl: return {id, paramKey(id), "N s^2/m^2", true, true, false};
+    case kMinDistance: return {id, paramKey(id), "m", true, true, true};
+    case kMaxDistance: return {id, paramKey(id), "m", true, true, true};
+    case kMaxElongation: return {id, paramKey(id), "1", true, true, false};
+    case kRestAngle: return {id, paramKey(id), "rad", false, false, false};
+    case kViscosity: return {id, paramKey(id), "N s/m", true, true, false};
+    case kGain: return {id, paramKey(id), "N", true, true, false};
+    case kFriction: return {id, paramKey(id), "N s/m", true, true, false};
+    case kHeight: return {id, paramKey(id), "m", false, false, false};
+    case kContactDepth: return {id, paramKey(id), "m", true, true, false};
+    case kActivationTime: return {id, paramKey(id), "s", true, true, false};
+    case kParamCount: break;
+  }
+  return {id, "?", "", false, false, false};  // not reached for a valid id
+}
+
+struct ParamCatalogue {
+  std::vector<ParamInfo> infos;
+  ParamCatalogue() {
+    for (int id = 0; id < kParamCount; ++id) infos.push_back(makeParamInfo(static_cast<ParamId>(id)));
+  }
+};
+
+}  // namespace
+
+const ParamInfo& paramInfo(ParamId id) {
+  static const ParamCatalogue kCatalogue;
+  return kCatalogue.infos.at(static_cast<size_t>(id));
+}
+
 const BondKindInfo& bondKindInfo(BondKind kind) {
   return catalogue().infos.at(static_cast<size_t>(kind));
 }

@@ -196,16 +196,6 @@ std::vector<std::vector<double>> equationErrorSeeds(const Model& model, const Tr
 
 }  // namespace
 
-const char* parameterFlagName(ParameterFlag flag) {
-  switch (flag) {
-    case ParameterFlag::kNone: return "";
-    case ParameterFlag::kAtLowerBound: return "at_lower_bound";
-    case ParameterFlag::kAtUpperBound: return "at_upper_bound";
-    case ParameterFlag::kUnidentifiable: return "unidentifiable";
-  }
-  return "?";
-}
-
 bool parseCostChoice(const std::string& name, CostChoice* choice) {
   if (name == "auto") *choice = CostChoice::kAuto;
   else if (name == "short_term") *choice = CostChoice::kShortTerm;
@@ -409,7 +399,7 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
   r.parameters = space.refs();
   r.values = space.toPhysical(best_genes);
   r.global_cost = es ? es->best().cost : std::numeric_limits<double>::infinity();
-  r.estimator = "short_term";
+  r.estimator = Estimator::kShortTerm;
   r.noise_estimate_m = estimateMarkerNoise(trajectory);
   std::vector<uint8_t> unidentifiable(space.size(), 0);
   std::vector<double> std_devs;
@@ -530,7 +520,7 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
       r.values = best_oe.values;
       r.global_cost = best_oe.observation_cost_m2;
       r.noise_std_m = best_oe.noise_std_m;
-      r.estimator = "output_error";
+      r.estimator = Estimator::kOutputError;
       std_devs = best_oe.std_devs;
       unidentifiable = best_oe.unidentifiable;
       omega_h = omegaH(r.values);
@@ -554,7 +544,7 @@ IdentifyResult identifyModel(const Model& input_model, const Trajectory& traject
     if (side != 0) r.flags[k] = side < 0 ? ParameterFlag::kAtLowerBound : ParameterFlag::kAtUpperBound;
     else if (unidentifiable[k]) r.flags[k] = ParameterFlag::kUnidentifiable;
   }
-  if (r.estimator == "short_term")
+  if (r.estimator == Estimator::kShortTerm)
     std_devs = options.estimate_std
                    ? estimateStdDevs(*cost, space, best_genes)
                    : std::vector<double>(r.values.size(), std::numeric_limits<double>::quiet_NaN());

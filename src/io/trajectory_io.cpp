@@ -1,16 +1,63 @@
-// Picks the trajectory reader from the file extension, so tools accept any supported format
-// through one entry point. Bags are read by the ROS layer (this library has no ROS dependency).
-
 #include "motion_model_estimation/io/trajectory_io.h"
 
 #include <algorithm>
 #include <cctype>
+#include <map>
+#include <mutex>
+#include <utility>
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/io/c3d.h"
 #include "motion_model_estimation/io/trc.h"
 
 namespace mme {
+
+namespace {
+
+/// The formats added from outside the core, by extension.
+class FormatRegistry {
+ public:
+  static FormatRegistry& instance() {
+    static FormatRegistry registry;
+    return registry;
+  }
+  void add(const std::string& extension, TrajectoryFormat format) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    formats_[extension] = std::move(format);
+  }
+  /// The format of `extension`, or one with neither function.
+  TrajectoryFormat find(const std::string& extension) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = formats_.find(extension);
+    return it == formats_.end() ? TrajectoryFormat{} : it->second;
+  }
+  /// "A, B or C": `built_in` and every registered extension with a reader (or a writer).
+  std::string names(std::vector<std::string> built_in, bool writers) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& [extension, format] : formats_)
+      if (writers ? static_cast<bool>(format.write) : static_cast<bool>(format.read))
+        built_in.push_back(extension);
+    std::string text;
+    for (size_t k = 0; k < built_in.size(); ++k)
+      text += (k == 0 ? "" : k + 1 == built_in.size() ? " or " : ", ") + built_in[k];
+    return text;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::map<std::string, TrajectoryFormat> formats_;
+};
+
+/// What a build without the ROS layer lacks, said where the user meets it.
+std::string missingFormatHint(const std::string& extension) {
+  return extension == ".bag" ? " (rosbags need the ROS build of the tools)" : "";
+}
+
+}  // namespace
+
+void registerTrajectoryFormat(const std::string& extension, TrajectoryFormat format) {
+  FormatRegistry::instance().add(extension, std::move(format));
+}
 
 std::string fileExtension(const std::string& path) {
   // Only the last path component counts: "runs.v2/data" has no extension.
@@ -29,8 +76,32 @@ Trajectory readTrajectoryFile(const std::string& path, std::vector<std::string>*
   const std::string ext = fileExtension(path);
   if (ext == ".trc") return readTrc(path, warnings);
   if (ext == ".c3d") return readC3d(path);
-  throw InputError(path + ": unsupported trajectory file extension '" + ext +
-                   "' (expected .trc, .c3d, or .bag via the ROS tools)");
+  throw InputError(path + ": unsupported trajectory file extension '" + ext + "' (expected " +
+                   FormatRegistry::instance().names({".trc", ".c3d"}, false) + ")" +
+                   missingFormatHint(ext));
+}
+
+Trajectory readTrajectory(const std::string& path, const std::string& topic,
+                          std::vector<std::string>* warnings) {
+  const std::string ext = fileExtension(path);
+  const TrajectoryFormat format = FormatRegistry::instance().find(ext);
+  Trajectory data = format.read ? format.read(path, topic) : readTrajectoryFile(path, warnings);
+  if (data.numFrames() == 0) throw InputError(path + ": no frames");
+  return data;
+}
+
+void writeTrajectory(const std::string& path, const Trajectory& trajectory,
+                     const TrajectoryWriteOptions& options) {
+  const std::string ext = fileExtension(path);
+  if (ext == ".trc") {
+    writeTrc(path, trajectory, options.units);
+    return;
+  }
+  const TrajectoryFormat format = FormatRegistry::instance().find(ext);
+  if (!format.write)
+    throw InputError(path + ": cannot write '" + ext + "' files (write " +
+                     FormatRegistry::instance().names({".trc"}, true) + ")" + missingFormatHint(ext));
+  format.write(path, trajectory, options);
 }
 
 }  // namespace mme

@@ -10,7 +10,7 @@ namespace {
 constexpr int kSelectionMinFrames = 35;  ///< selectStructure: 20 fitted + 15 held out
 }
 
-StructureJob::StructureJob(Model base, StructureOptions options, int min_frames, bool request_first)
+StructureJob::StructureJob(Model base, PipelineOptions options, int min_frames, bool request_first)
     : base_(std::move(base)), options_(std::move(options)),
       min_frames_(std::max(min_frames, kSelectionMinFrames)), requested_(request_first),
       state_(request_first ? State::kPending : State::kIdle) {}
@@ -34,7 +34,7 @@ std::optional<StructureResult> StructureJob::runIfDue(const Trajectory& window) 
     state_ = State::kRunning;
   }
   try {
-    StructureResult result = selectStructure(base_, window, options_);
+    StructureResult result = chooseStructure(base_, window, options_);
     std::string level;
     for (const StructureCandidate& c : result.candidates)
       if (c.chosen) level = c.name;

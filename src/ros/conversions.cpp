@@ -2,6 +2,10 @@
 
 #include <cmath>
 
+#include <sensor_msgs/point_cloud2_iterator.h>
+
+#include "motion_model_estimation/live/marker_name_map.h"
+
 namespace mme {
 
 motion_model_estimation::MarkerFrame toMarkerFrameMsg(const Trajectory& trajectory, int t,
@@ -49,6 +53,64 @@ std::string appendMarkerFrame(const motion_model_estimation::MarkerFrame& msg,
     trajectory->occluded.push_back(occluded ? 1 : 0);
   }
   return "";
+}
+
+std::string fromMarkerFrame(const motion_model_estimation::MarkerFrame& msg, ObservedPoints* points) {
+  if (msg.names.size() != msg.positions.size() ||
+      (!msg.occluded.empty() && msg.occluded.size() != msg.positions.size()))
+    return MarkerNameMap::kLengthsDiffer;
+  points->positions_m.resize(msg.positions.size());
+  points->occluded.assign(msg.positions.size(), 0);
+  for (size_t i = 0; i < msg.positions.size(); ++i) {
+    points->positions_m[i] = Eigen::Vector3d(msg.positions[i].x, msg.positions[i].y, msg.positions[i].z);
+    points->occluded[i] = !msg.occluded.empty() && msg.occluded[i];
+  }
+  return "";
+}
+
+std::string fromPointCloud(const sensor_msgs::PointCloud2& msg, ObservedPoints* points) {
+  const size_t n = static_cast<size_t>(msg.width) * msg.height;
+  bool has_xyz = false;
+  for (const auto& f : msg.fields) has_xyz = has_xyz || f.name == "x";
+  if (!has_xyz || msg.point_step == 0 || msg.data.size() < n * msg.point_step)
+    return "PointCloud2 without x/y/z fields or with truncated data";
+  points->positions_m.clear();
+  points->occluded.clear();
+  try {
+    sensor_msgs::PointCloud2ConstIterator<float> it(msg, "x");
+    for (size_t i = 0; i < n; ++i, ++it) {
+      points->positions_m.emplace_back(it[0], it[1], it[2]);
+      points->occluded.push_back(!points->positions_m.back().allFinite());
+    }
+  } catch (const std::exception& e) {
+    return std::string("PointCloud2: ") + e.what();
+  }
+  return "";
+}
+
+Eigen::Isometry3d fromTransform(const geometry_msgs::Transform& transform) {
+  const auto& q = transform.rotation;
+  const auto& t = transform.translation;
+  return Eigen::Isometry3d(Eigen::Translation3d(t.x, t.y, t.z) * Eigen::Quaterniond(q.w, q.x, q.y, q.z));
+}
+
+motion_model_estimation::ModelEstimate toModelEstimateMsg(const Estimate& e, const std::string& frame_id,
+                                                          const ros::Time& stamp) {
+  motion_model_estimation::ModelEstimate msg;
+  msg.header.stamp = stamp;
+  msg.header.frame_id = frame_id;
+  msg.generation = e.generation;
+  msg.evaluations = e.evaluations;
+  msg.global_cost = e.global_cost;
+  msg.window_frames = e.window_frames;
+  msg.parameter_names = e.parameter_names;
+  msg.values = e.values;
+  msg.std_devs = e.std_devs;
+  msg.stable = e.stable;
+  msg.estimator = estimatorName(e.estimator);
+  for (ParameterFlag flag : e.parameter_flags) msg.parameter_flags.push_back(parameterFlagName(flag));
+  msg.noise_std_m = e.noise_std_m;
+  return msg;
 }
 
 }  // namespace mme

@@ -1,7 +1,6 @@
 #include "motion_model_estimation/ros/estimator_node.h"
 
 #include <geometry_msgs/TransformStamped.h>
-#include <sensor_msgs/point_cloud2_iterator.h>
 #include <std_msgs/String.h>
 
 #include <sys/stat.h>
@@ -19,7 +18,10 @@
 #include "motion_model_estimation/io/model_yaml.h"
 #include "motion_model_estimation/io/path_confinement.h"
 #include "motion_model_estimation/live/estimator_stats.h"
+#include "motion_model_estimation/live/replay_pacing.h"
+#include "motion_model_estimation/pipeline/result_metadata.h"
 #include "motion_model_estimation/ros/bag_io.h"
+#include "motion_model_estimation/ros/conversions.h"
 #include "motion_model_estimation/ros/names.h"
 #include "motion_model_estimation/ros/param_utils.h"
 #include "motion_model_estimation/ros/vicon_markers.h"
@@ -28,37 +30,25 @@ namespace mme {
 
 namespace {
 
-template <typename T>
-void read(const ros::NodeHandle& pnh, const std::string& name, T* value) {
-  std::string error;
-  if (!readParam(pnh, name, value, &error)) throw InputError(error);
-}
+/// The parameter server as a ParameterSource: a param set with the wrong type is an error
+/// naming it (readParam), an unset one keeps the documented default.
+class RosParameterSource : public ParameterSource {
+ public:
+  explicit RosParameterSource(const ros::NodeHandle& pnh) : pnh_(pnh) {}
+  bool get(const std::string& name, std::string* value) const override { return read(name, value); }
+  bool get(const std::string& name, double* value) const override { return read(name, value); }
+  bool get(const std::string& name, int* value) const override { return read(name, value); }
+  bool get(const std::string& name, bool* value) const override { return read(name, value); }
 
-void require(bool ok, const std::string& message) {
-  if (!ok) throw InputError(message);
-}
-
-bool parseInputType(const std::string& text, InputType* type) {
-  if (text == "markers") {
-    *type = InputType::kMarkers;
-  } else if (text == "pointcloud") {
-    *type = InputType::kPointCloud;
-  } else if (text == "vicon") {
-    *type = InputType::kVicon;
-  } else {
-    return false;
+ private:
+  template <typename T>
+  bool read(const std::string& name, T* value) const {
+    std::string error;
+    if (!readParam(pnh_, name, value, &error)) throw InputError(error);
+    return pnh_.hasParam(name);
   }
-  return true;
-}
-
-const char* inputTypeName(InputType type) {
-  switch (type) {
-    case InputType::kMarkers: return "markers";
-    case InputType::kPointCloud: return "pointcloud";
-    case InputType::kVicon: return "vicon";
-  }
-  return "?";
-}
+  const ros::NodeHandle& pnh_;
+};
 
 /// [s] on the monotonic clock: update gaps must not follow wall-clock or sim-time jumps.
 double steadyNowS() {
@@ -69,111 +59,7 @@ double steadyNowS() {
 }  // namespace
 
 EstimatorNodeOptions readEstimatorOptions(const ros::NodeHandle& pnh) {
-  EstimatorNodeOptions o;
-  read(pnh, "model", &o.model_path);
-  require(!o.model_path.empty(), "~model is required (path to a model file)");
-  std::string input_type = inputTypeName(o.input_type);
-  read(pnh, "input_type", &input_type);
-  require(parseInputType(input_type, &o.input_type),
-          "~input_type must be markers, pointcloud or vicon, got '" + input_type + "'");
-  read(pnh, "bag", &o.bag);
-  read(pnh, "bag_topic", &o.bag_topic);
-  read(pnh, "bag_rate", &o.bag_rate);
-  require(o.bag_rate >= 0.0 && std::isfinite(o.bag_rate), "~bag_rate must be >= 0");
-  read(pnh, "fixed_frame", &o.fixed_frame);
-  read(pnh, "update_rate_hz", &o.update_rate_hz);
-  require(o.update_rate_hz > 0.0 && o.update_rate_hz <= 1000.0,
-          "~update_rate_hz must be in (0, 1000]");
-  read(pnh, "publish_markers", &o.publish_markers);
-  std::string color_bonds_by = bondColouringName(o.color_bonds_by);
-  read(pnh, "color_bonds_by", &color_bonds_by);
-  require(parseBondColouring(color_bonds_by, &o.color_bonds_by),
-          "~color_bonds_by must be strain or local_cost");
-  read(pnh, "particle_diameter_m", &o.particle_diameter_m);
-  require(o.particle_diameter_m > 0.0, "~particle_diameter_m must be > 0");
-  read(pnh, "tf_timeout_sec", &o.tf_timeout_sec);
-  require(o.tf_timeout_sec >= 0.0, "~tf_timeout_sec must be >= 0");
-  read(pnh, "vicon_qualify_with_subject", &o.vicon_qualify_with_subject);
-  read(pnh, "model_dir", &o.model_dir);
-  if (o.model_dir.empty()) {
-    const char* ros_home = std::getenv("ROS_HOME");
-    const char* home = std::getenv("HOME");
-    o.model_dir = ros_home ? ros_home : std::string(home ? home : "/tmp") + "/.ros";
-  }
-  read(pnh, "autosave_path", &o.autosave_path);
-  read(pnh, "autosave_period_sec", &o.autosave_period_sec);
-  require(o.autosave_period_sec > 0.0 && std::isfinite(o.autosave_period_sec),
-          "~autosave_period_sec must be > 0");
-  read(pnh, "initial_model", &o.initial_model);
-  read(pnh, "select_structure", &o.select_structure);
-  read(pnh, "structure_report_path", &o.structure_report_path);
-  require(!o.structure_report_path.empty(), "~structure_report_path must not be empty");
-  read(pnh, "structure_max_time_sec", &o.structure_max_time_s);
-  require(o.structure_max_time_s >= 0.0 && std::isfinite(o.structure_max_time_s),
-          "~structure_max_time_sec must be >= 0 (0 = no limit)");
-  read(pnh, "prediction_period_sec", &o.prediction_period_sec);
-  require(o.prediction_period_sec >= 0.0 && std::isfinite(o.prediction_period_sec),
-          "~prediction_period_sec must be >= 0 (0 = off)");
-  OnlineEstimatorOptions& e = o.estimator;
-  read(pnh, "window_frames", &e.window_frames);
-  require(e.window_frames >= 3, "~window_frames must be >= 3");
-  require(!o.select_structure || e.window_frames >= 35,
-          "~select_structure needs ~window_frames >= 35 (20 frames fitted, 15 held out)");
-  e.min_frames = std::min(e.min_frames, e.window_frames);
-  read(pnh, "min_frames", &e.min_frames);
-  require(e.min_frames >= 3 && e.min_frames <= e.window_frames,
-          "~min_frames must be in [3, ~window_frames]");
-  read(pnh, "generations_per_update", &e.generations_per_update);
-  require(e.generations_per_update >= 1, "~generations_per_update must be >= 1");
-  read(pnh, "update_budget_sec", &e.update_budget_s);
-  require(e.update_budget_s > 0.0 && std::isfinite(e.update_budget_s),
-          "~update_budget_sec must be > 0");
-  read(pnh, "refine_max_sec", &e.refine_max_s);
-  require(e.refine_max_s > 0.0 && std::isfinite(e.refine_max_s), "~refine_max_sec must be > 0");
-  read(pnh, "segment_frames", &e.output_error.segment_frames);
-  require(e.output_error.segment_frames >= 2, "~segment_frames must be >= 2");
-  read(pnh, "grow_segments", &e.output_error.grow_segments);
-  require(e.output_error.grow_segments >= 0, "~grow_segments must be >= 0 (0 = off)");
-  read(pnh, "population", &e.es.population);
-  require(e.es.population >= 2, "~population must be >= 2");
-  e.es.offspring = e.es.population;
-  int seed = static_cast<int>(e.es.seed);
-  read(pnh, "seed", &seed);
-  require(seed >= 0, "~seed must be >= 0");
-  e.es.seed = static_cast<uint64_t>(seed);
-  read(pnh, "threads", &e.es.threads);
-  require(e.es.threads >= 1 && e.es.threads <= 256, "~threads must be in [1, 256]");
-  // ~preset chooses the engine settings (default: the measured best; paper: the paper's
-  // schedule); the ~refine_* parameters, when set, override it.
-  std::string preset_name = presetName(Preset::kDefault);
-  read(pnh, "preset", &preset_name);
-  Preset preset = Preset::kDefault;
-  require(parsePreset(preset_name, &preset),
-          "~preset must be " + std::string(presetNames()) + ", got '" + preset_name + "'");
-  {
-    const EsOptions from_preset = onlineEsOptions(preset);
-    e.es.refine_algorithm = from_preset.refine_algorithm;
-    e.es.refine_start_generation = from_preset.refine_start_generation;
-    e.es.refine_period = from_preset.refine_period;
-    e.es.refine_smooth_genes_only = from_preset.refine_smooth_genes_only;
-  }
-  read(pnh, "refine_start_generation", &e.es.refine_start_generation);
-  read(pnh, "refine_period", &e.es.refine_period);
-  std::string refine_algorithm = refineAlgorithmName(e.es.refine_algorithm);
-  read(pnh, "refine_algorithm", &refine_algorithm);
-  require(parseRefineAlgorithm(refine_algorithm, &e.es.refine_algorithm),
-          "~refine_algorithm must be " + std::string(refineAlgorithmNames()) + ", got '" +
-              refine_algorithm + "'");
-  require(e.es.refine_start_generation >= 0 && e.es.refine_period >= 0,
-          "~refine_start_generation and ~refine_period must be >= 0");
-  if (preset == Preset::kPaper) e.cost = CostChoice::kShortTerm;  // the paper's own cost
-  std::string cost = costChoiceName(e.cost);
-  read(pnh, "cost", &cost);
-  require(parseCostChoice(cost, &e.cost),
-          "~cost must be auto, short_term or output_error, got '" + cost + "'");
-  const std::string bad = validateOptions(e);
-  require(bad.empty(), "~" + bad);  // its messages name the option, i.e. the parameter
-  return o;
+  return readEstimatorNodeOptions(RosParameterSource(pnh));
 }
 
 EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
@@ -204,10 +90,10 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
     std::string error;
     structure_report_target_ = confinePath(options_.model_dir, options_.structure_report_path, true, &error);
     if (structure_report_target_.empty()) throw InputError("~structure_report_path: " + error);
-    StructureOptions so;
+    PipelineOptions so;
     so.identify.es.threads = estimator_options.es.threads;
-    so.max_wall_time_s = options_.structure_max_time_s;
-    so.progress = [](const std::string& line) { ROS_INFO("estimator_node: %s", line.c_str()); };
+    so.identify.max_wall_time_s = options_.structure_max_time_s;
+    so.say = [](const std::string& line) { ROS_INFO("estimator_node: %s", line.c_str()); };
     // A resumed model has its structure: the selection then waits for ~reset.
     const bool resumed = estimator_options.resume_from_model_values;
     structure_ = std::make_unique<StructureJob>(model, so, estimator_options.window_frames, !resumed);
@@ -270,44 +156,20 @@ void EstimatorNode::reject(const std::string& why) {
 
 void EstimatorNode::onMarkerFrame(const motion_model_estimation::MarkerFrame::ConstPtr& msg) {
   const auto arrival = std::chrono::steady_clock::now();
-  if (msg->names.size() != msg->positions.size() ||
-      (!msg->occluded.empty() && msg->occluded.size() != msg->positions.size())) {
-    reject(MarkerNameMap::kLengthsDiffer);
-    return;
-  }
-  std::vector<Eigen::Vector3d> x(msg->positions.size());
-  std::vector<uint8_t> occluded(msg->positions.size(), 0);
-  for (size_t i = 0; i < x.size(); ++i) {
-    x[i] = Eigen::Vector3d(msg->positions[i].x, msg->positions[i].y, msg->positions[i].z);
-    occluded[i] = !msg->occluded.empty() && msg->occluded[i];
-  }
-  addObservation(msg->header.stamp, msg->header.frame_id, msg->names, std::move(x),
-                 std::move(occluded), arrival);
+  ObservedPoints points;
+  const std::string why = fromMarkerFrame(*msg, &points);
+  if (!why.empty()) return reject(why);
+  addObservation(msg->header.stamp, msg->header.frame_id, msg->names, std::move(points.positions_m),
+                 std::move(points.occluded), arrival);
 }
 
 void EstimatorNode::onPointCloud(const sensor_msgs::PointCloud2::ConstPtr& msg) {
   const auto arrival = std::chrono::steady_clock::now();
-  const size_t n = static_cast<size_t>(msg->width) * msg->height;
-  bool has_xyz = false;
-  for (const auto& f : msg->fields) has_xyz = has_xyz || f.name == "x";
-  if (!has_xyz || msg->point_step == 0 || msg->data.size() < n * msg->point_step) {
-    reject("PointCloud2 without x/y/z fields or with truncated data");
-    return;
-  }
-  std::vector<Eigen::Vector3d> x;
-  std::vector<uint8_t> occluded;
-  try {
-    sensor_msgs::PointCloud2ConstIterator<float> it(*msg, "x");
-    for (size_t i = 0; i < n; ++i, ++it) {
-      x.emplace_back(it[0], it[1], it[2]);
-      occluded.push_back(!x.back().allFinite());
-    }
-  } catch (const std::exception& e) {
-    reject(std::string("PointCloud2: ") + e.what());
-    return;
-  }
-  addObservation(msg->header.stamp, msg->header.frame_id, {}, std::move(x), std::move(occluded),
-                 arrival);
+  ObservedPoints points;
+  const std::string why = fromPointCloud(*msg, &points);
+  if (!why.empty()) return reject(why);
+  addObservation(msg->header.stamp, msg->header.frame_id, {}, std::move(points.positions_m),
+                 std::move(points.occluded), arrival);
 }
 
 void EstimatorNode::onVicon(const topic_tools::ShapeShifter::ConstPtr& msg) {
@@ -347,10 +209,7 @@ void EstimatorNode::addObservation(const ros::Time& stamp, const std::string& fr
       reject("no transform " + frame_id + " -> " + fixed_frame_ + ": " + e.what());
       return;
     }
-    const auto& q = tf.transform.rotation;
-    const auto& t = tf.transform.translation;
-    const Eigen::Isometry3d pose =
-        Eigen::Translation3d(t.x, t.y, t.z) * Eigen::Quaterniond(q.w, q.x, q.y, q.z);
+    const Eigen::Isometry3d pose = fromTransform(tf.transform);
     for (Eigen::Vector3d& x : positions_m) x = pose * x;
   }
   {
@@ -468,12 +327,11 @@ void EstimatorNode::bagLoop() {
   }
   ROS_INFO("estimator_node: replaying %d frames of %s", bag.numFrames(), options_.bag.c_str());
   const int n = bag.numMarkers();
+  const ReplayPacing pacing(options_.bag_rate, bag.times_s[0], options_.estimator.min_frames);
   const auto wall_start = std::chrono::steady_clock::now();
   for (int t = 0; t < bag.numFrames() && !stop_ && ros::ok(); ++t) {
-    if (options_.bag_rate > 0.0) {
-      const double due_s = (bag.times_s[t] - bag.times_s[0]) / options_.bag_rate;
-      std::this_thread::sleep_until(wall_start + std::chrono::duration<double>(due_s));
-    }
+    if (const std::optional<double> due_s = pacing.dueAfterS(bag.times_s[t]))
+      std::this_thread::sleep_until(wall_start + std::chrono::duration<double>(*due_s));
     std::vector<Eigen::Vector3d> x(bag.positions_m.begin() + t * n,
                                    bag.positions_m.begin() + (t + 1) * n);
     std::vector<uint8_t> occ(bag.occluded.begin() + t * n, bag.occluded.begin() + (t + 1) * n);
@@ -482,19 +340,10 @@ void EstimatorNode::bagLoop() {
     const uint64_t before = update_stats_.updates();
     addObservation(stamp, "", bag.marker_names, std::move(x), std::move(occ),
                    std::chrono::steady_clock::now());
-    if (options_.bag_rate == 0.0 && t + 1 >= options_.estimator.min_frames) {
-      // As fast as the estimator keeps up: every window position gets one update. While a
-      // structure is to be chosen, frames go on until the window is full, then the selection
-      // and the chosen model's first update are waited for (a failed selection: frames go on).
-      while (update_stats_.updates() == before && !stop_ && ros::ok()) {
-        if (structure_) {
-          const StructureJob::State state = structure_->state();
-          if (state == StructureJob::State::kFailed) break;
-          if (state == StructureJob::State::kPending && t + 1 < structure_->minFrames()) break;
-        }
-        std::this_thread::sleep_for(std::chrono::milliseconds(1));
-      }
-    }
+    if (!pacing.waitsForUpdate(t + 1)) continue;
+    while (update_stats_.updates() == before && !stop_ && ros::ok() &&
+           !ReplayPacing::structureReleases(structure_.get(), t + 1))
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   ROS_INFO("estimator_node: bag replay finished; identification goes on on the last window");
 }
@@ -504,21 +353,7 @@ void EstimatorNode::onPublishTimer(const ros::WallTimerEvent&) {
   if (!e.valid) return;
   if (e.generation != last_published_generation_) {
     last_published_generation_ = e.generation;
-    motion_model_estimation::ModelEstimate msg;
-    msg.header.stamp = ros::Time::now();
-    msg.header.frame_id = fixed_frame_;
-    msg.generation = e.generation;
-    msg.evaluations = e.evaluations;
-    msg.global_cost = e.global_cost;
-    msg.window_frames = e.window_frames;
-    msg.parameter_names = e.parameter_names;
-    msg.values = e.values;
-    msg.std_devs = e.std_devs;
-    msg.stable = e.stable;
-    msg.estimator = e.estimator;
-    msg.parameter_flags = e.parameter_flags;
-    msg.noise_std_m = e.noise_std_m;
-    estimate_pub_.publish(msg);
+    estimate_pub_.publish(toModelEstimateMsg(e, fixed_frame_, ros::Time::now()));
   }
   if (options_.publish_markers) {
     {
@@ -588,18 +423,7 @@ std::string EstimatorNode::exportYaml(const Estimate& e) const {
   for (size_t k = 0; same_parameters && k < refs.size(); ++k)
     same_parameters = refs[k].name == e.parameter_names[k];
   if (same_parameters) setValues(model, refs, e.values);
-  IdentificationInfo info;
-  info.method = e.estimator == "output_error" ? "es-online+output_error" : "es-online";
-  for (size_t k = 0; k < e.parameter_names.size() && k < e.parameter_flags.size(); ++k)
-    if (!e.parameter_flags[k].empty()) info.flags.emplace_back(e.parameter_names[k], e.parameter_flags[k]);
-  info.global_cost = e.global_cost;
-  info.frames = static_cast<int>(e.window_frames);
-  info.generations = static_cast<int>(e.generation);
-  for (size_t k = 0; k < e.parameter_names.size() && k < e.std_devs.size(); ++k)
-    if (std::isfinite(e.std_devs[k])) {
-      info.std_names.push_back(e.parameter_names[k]);
-      info.std_values.push_back(e.std_devs[k]);
-    }
+  const IdentificationInfo info = identificationInfo(e);
   return modelToYaml(model, same_parameters ? &info : nullptr);
 }
 

@@ -16,6 +16,7 @@
 #include <utility>
 
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/model_builder.h"
 #include "motion_model_estimation/core/random.h"
 #include "motion_model_estimation/core/simulator.h"
 
@@ -24,55 +25,13 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-Param fixedParam(double value) {
-  Param p;
-  p.value = value;
-  p.present = p.has_value = true;
-  return p;
-}
-
-Param freeParam(double value, double min, double max) {
-  Param p = fixedParam(value);
-  p.free = true;
-  p.min = min;
-  p.max = max;
-  p.has_min = p.has_max = true;
-  return p;
-}
-
 /// Positive magnitude (stiffness, damping, ...): bounds [truth/10, truth*10].
-Param freeMagnitude(double value) { return freeParam(value, value / 10.0, value * 10.0); }
+Param freeMagnitude(double value) { return boundedParam(value, value / 10.0, value * 10.0); }
 /// Length (rest length, distance): bounds [truth/2, truth*2].
-Param freeLength(double value) { return freeParam(value, value / 2.0, value * 2.0); }
+Param freeLength(double value) { return boundedParam(value, value / 2.0, value * 2.0); }
 
 void setGravity(Model* model, const Eigen::Vector3d& g) {
-  for (int k = 0; k < 3; ++k) model->gravity_mps2[k] = fixedParam(g[k]);
-}
-
-int addParticle(Model* model, const std::string& name, double mass_kg, const Eigen::Vector3d& x,
-                const Eigen::Vector3d& v = Eigen::Vector3d::Zero(), bool fixed = false,
-                const std::string& group = "") {
-  Particle p;
-  p.name = name;
-  p.mass_kg = mass_kg;
-  p.position_m = x;
-  p.velocity_mps = v;
-  p.fixed = fixed;
-  p.group = group;
-  model->particles.push_back(p);
-  return static_cast<int>(model->particles.size()) - 1;
-}
-
-int addType(Model* model, const BondType& type) {
-  model->bond_types.push_back(type);
-  return static_cast<int>(model->bond_types.size()) - 1;
-}
-
-void addBond(Model* model, int type, int a, int b = -1, int c = -1) {
-  Bond bond;
-  bond.type = type;
-  bond.particles = {{a, b, c}};
-  model->bonds.push_back(bond);
+  for (int k = 0; k < 3; ++k) model->gravity_mps2[k] = valueParam(g[k]);
 }
 
 double roundTo(double x, double step) { return std::round(x / step) * step; }
@@ -106,7 +65,7 @@ Scene makePaperObject() {
     Eigen::Vector3d v;
     for (int c = 0; c < 3; ++c) v[c] = roundTo(0.1 * (random.uniform() - 0.5), 1e-3);  // +-5 cm/s
     std::snprintf(name, sizeof(name), "m%02d", i);
-    addParticle(&model, name, roundTo(0.5 + 1.5 * random.uniform(), 0.01), x[i], v);
+    addParticle(&model, x[i], {name, roundTo(0.5 + 1.5 * random.uniform(), 0.01), v});
   }
   // Bonds: a minimum spanning tree (Prim) keeps the object connected with short bonds; then the
   // shortest remaining pairs until 31.
@@ -158,7 +117,7 @@ Scene makePaperObject() {
     const double length = roundTo(length_sum[t] / count[t] * (1.0 + strain), 1e-4);
     type.param(kStiffness) = freeMagnitude(k);
     type.param(kRestLength) = freeLength(length);
-    addType(&model, type);
+    addBondType(&model, type);
   }
   scene.default_frames = 100;
   return scene;
@@ -298,8 +257,8 @@ Scene makeProvotCloth() {
     for (int c = 0; c < kClothSide; ++c) {
       std::snprintf(name, sizeof(name), "c_%d_%d", r, c);
       const bool fixed = r == 0 && (c == 0 || c == kClothSide - 1);
-      addParticle(&model, name, mass, Eigen::Vector3d(c * kClothPeriodM, -r * kClothPeriodM, 0.0),
-                  Eigen::Vector3d::Zero(), fixed);
+      addParticle(&model, Eigen::Vector3d(c * kClothPeriodM, -r * kClothPeriodM, 0.0),
+                  {name, mass, Eigen::Vector3d::Zero(), fixed});
     }
   auto id = [](int r, int c) { return r * kClothSide + c; };
   struct TypeSpec {
@@ -323,15 +282,15 @@ Scene makeProvotCloth() {
     type.param(kStiffness) = freeMagnitude(s.stiffness);
     type.param(kRestLength) = freeLength(s.rest_length);
     type.param(kStiffnessNl) = freeMagnitude(s.stiffness_nl);
-    type.param(kDamping) = fixedParam(s.damping);
+    type.param(kDamping) = valueParam(s.damping);
     if (s.clamped) type.param(kMaxElongation) = freeMagnitude(0.5);
-    addType(&model, type);
+    addBondType(&model, type);
   }
   BondType air;
   air.name = "air";
   air.kind = BondKind::kViscosity;
-  air.param(kViscosity) = fixedParam(5.0 * mass);  // [N s/m]: decay rate 5 /s
-  const int air_type = addType(&model, air);
+  air.param(kViscosity) = valueParam(5.0 * mass);  // [N s/m]: decay rate 5 /s
+  const int air_type = addBondType(&model, air);
   for (int r = 0; r < kClothSide; ++r)
     for (int c = 0; c < kClothSide; ++c) {
       if (c + 1 < kClothSide) addBond(&model, 0, id(r, c), id(r, c + 1));
@@ -390,7 +349,7 @@ Scene makeFluidJet() {
       const Eigen::Vector3d v(2.0 * kGasAgitationMps * (random.uniform() - 0.5),
                               2.0 * kGasAgitationMps * (random.uniform() - 0.5), 0.0);
       std::snprintf(name, sizeof(name), "gas_%03d", r * kGasColumns + c);
-      addParticle(&model, name, 1.0, x, v, false, "gas");
+      addParticle(&model, x, {name, 1.0, v, false, "gas"});
     }
   // Jet: a stream kJetWidth wide, left of the gas, centred on it, moving right.
   const double y_centre = 0.5 * (kGasRows - 1) * kGasSpacing;
@@ -401,26 +360,26 @@ Scene makeFluidJet() {
                               y_centre + (w - 0.5 * (kJetWidth - 1) + 0.1 * (random.uniform() - 0.5)) * kJetSpacing,
                               0.0);
       std::snprintf(name, sizeof(name), "jet_%03d", c * kJetWidth + w);
-      addParticle(&model, name, 1.0, x, Eigen::Vector3d(kJetSpeed, 0.0, 0.0), false, "jet");
+      addParticle(&model, x, {name, 1.0, Eigen::Vector3d(kJetSpeed, 0.0, 0.0), false, "jet"});
     }
   BondType gas_visc;
   gas_visc.name = "gas_visc";
   gas_visc.param(kDamping) = freeMagnitude(2.5);
   gas_visc.param(kDampingNl) = freeMagnitude(1.25);
   gas_visc.param(kMaxDistance) = freeLength(1.5);
-  const int gv = addType(&model, gas_visc);
+  const int gv = addBondType(&model, gas_visc);
   BondType jet_visc;
   jet_visc.name = "jet_visc";
   jet_visc.param(kDamping) = freeMagnitude(4.0);
   jet_visc.param(kDampingNl) = freeMagnitude(2.0);
   jet_visc.param(kMaxDistance) = freeLength(2.0);
-  const int jv = addType(&model, jet_visc);
+  const int jv = addBondType(&model, jet_visc);
   BondType elast;
   elast.name = "elast";
   elast.param(kStiffness) = freeMagnitude(2.0);
-  elast.param(kRestLength) = fixedParam(1.1);
+  elast.param(kRestLength) = valueParam(1.1);
   elast.param(kMaxDistance) = freeLength(1.1);
-  const int el = addType(&model, elast);
+  const int el = addBondType(&model, elast);
   model.interactions = {{gv, "gas", "gas"}, {jv, "jet", "gas"}, {jv, "jet", "jet"},
                         {el, "gas", "gas"}, {el, "gas", "jet"}, {el, "jet", "jet"}};
   scene.default_frames = 200;
@@ -488,13 +447,13 @@ BondType walkerMuscleType(const std::string& name, double gain_n, int inputs, in
   BondType type;
   type.name = name;
   type.kind = BondKind::kMuscle;
-  type.param(kStiffness) = fixedParam(0.0);
-  type.param(kRestLength) = fixedParam(0.0);
-  type.param(kDamping) = fixedParam(0.0);
-  type.param(kGain) = fixedParam(gain_n);
+  type.param(kStiffness) = valueParam(0.0);
+  type.param(kRestLength) = valueParam(0.0);
+  type.param(kDamping) = valueParam(0.0);
+  type.param(kGain) = valueParam(gain_n);
   type.network_inputs = inputs;
   type.network_hidden = hidden;
-  for (double w : network) type.network.push_back(fixedParam(w));
+  for (double w : network) type.network.push_back(valueParam(w));
   return type;
 }
 
@@ -528,7 +487,7 @@ Scene makeWalker() {
     for (int k = 0; k < 5; ++k) {
       std::snprintf(name, sizeof(name), "leg_%s_%d", leg_names[l], k);
       if (k == 4) x.z() = 0.0;  // on the floor despite rounding
-      leg[l][k] = addParticle(&model, name, kWalkerLegMassKg[k], x);
+      leg[l][k] = addParticle(&model, x, {name, kWalkerLegMassKg[k]});
       if (k == 4) break;
       const double down = seg * std::cos(leg_angles[k]);
       x += Eigen::Vector3d(seg * std::sin(leg_angles[k]), side * down * std::sin(splay), -down * std::cos(splay));
@@ -549,7 +508,7 @@ Scene makeWalker() {
   int next_body = 0;
   auto addBody = [&](const Eigen::Vector3d& x, double mass_kg) {
     std::snprintf(name, sizeof(name), "body_%02d", next_body++);
-    return addParticle(&model, name, mass_kg, x);
+    return addParticle(&model, x, {name, mass_kg});
   };
   for (int s = 0; s < 4; ++s) section[s][2] = addBody(sectionPoint(s, 2), kWalkerTrunkMassKg);  // 00-03
   for (int corner = 0; corner < 2; ++corner)  // 04-07: rails between the legs
@@ -593,7 +552,7 @@ Scene makeWalker() {
     type.param(kStiffness) = freeMagnitude(springs[t].stiffness);
     type.param(kDamping) = freeMagnitude(springs[t].damping);
     type.param(kRestLength) = freeLength(springs[t].rest_length);
-    spring_type[t] = addType(&model, type);
+    spring_type[t] = addBondType(&model, type);
   }
   // Flexion types, free: stiffness, rest angle; damping fixed.
   struct FlexionSpec {
@@ -613,10 +572,10 @@ Scene makeWalker() {
     type.name = flexions[t].name;
     type.kind = BondKind::kFlexion;
     type.param(kStiffness) = freeMagnitude(flexions[t].stiffness);
-    type.param(kRestAngle) = freeParam(flexions[t].rest_angle, 0.5 * flexions[t].rest_angle,
+    type.param(kRestAngle) = boundedParam(flexions[t].rest_angle, 0.5 * flexions[t].rest_angle,
                                        std::min(kPi, 2.0 * flexions[t].rest_angle));
-    type.param(kDamping) = fixedParam(flexions[t].damping);
-    flexion_type[t] = addType(&model, type);
+    type.param(kDamping) = valueParam(flexions[t].damping);
+    flexion_type[t] = addBondType(&model, type);
   }
   // Ground contact, free: stiffness, damping, friction; the floor's height (0) and contact
   // depth fixed. The damping and friction grow over the first 0.3 mm of the 4.5-6 mm a stance
@@ -628,9 +587,9 @@ Scene makeWalker() {
   ground.param(kStiffness) = freeMagnitude(5.0e5);
   ground.param(kDamping) = freeMagnitude(2000.0);
   ground.param(kFriction) = freeMagnitude(4000.0);
-  ground.param(kHeight) = fixedParam(0.0);
-  ground.param(kContactDepth) = fixedParam(3.0e-4);
-  const int ground_type = addType(&model, ground);
+  ground.param(kHeight) = valueParam(0.0);
+  ground.param(kContactDepth) = valueParam(3.0e-4);
+  const int ground_type = addBondType(&model, ground);
   // Legs: segments, joints, hips, splay (from the other hip of the pair), ground contact.
   for (int l = 0; l < 4; ++l) {
     const int other_hip = leg[l ^ 1][0];
@@ -669,7 +628,7 @@ Scene makeWalker() {
   for (int corner = 0; corner < 3; ++corner)
     tail_top = addNamedBond(&model, spring_type[kTail], tail, section[0][corner], tail_names[corner]);
   // Muscles. The tail's drive: y = w s_top.
-  const int tail_drive = addType(&model, walkerMuscleType("tail_drive", kTailDriveGainN, 1, 0,
+  const int tail_drive = addBondType(&model, walkerMuscleType("tail_drive", kTailDriveGainN, 1, 0,
                                                           {0.0, kTailDriveSpeed, 0.0}));
   addBond(&model, tail_drive, tail, section[0][2]);
   model.bonds.back().inputs = {tail_top};
@@ -679,12 +638,12 @@ Scene makeWalker() {
   for (int d = 0; d < 2; ++d) {
     const double sign = d == 0 ? 1.0 : -1.0;
     const std::string diagonal = d == 0 ? "_a" : "_b";
-    swing[d] = addType(&model, walkerMuscleType("swing" + diagonal, kSwingGainN, 2, 2,
+    swing[d] = addBondType(&model, walkerMuscleType("swing" + diagonal, kSwingGainN, 2, 2,
                                                 {0.0, kReachServoZ, 0.0, kReachServoS,                   // w1_0_*
                                                  sign * kSwingStrideZ, 0.0, sign * kSwingStrideS, 0.0,   // w1_1_*
                                                  0.0, -sign * kSwingStrideZ * kTailMeanM,                // b1
                                                  kReachOut, kSwingOut, 0.0}));                           // w2, b2
-    lift[d] = addType(&model, walkerMuscleType("lift" + diagonal, kLiftGainN, 2, 2,
+    lift[d] = addBondType(&model, walkerMuscleType("lift" + diagonal, kLiftGainN, 2, 2,
                                                {0.0, kCannonServoZ, 0.0, kCannonServoS,                  // w1_0_*
                                                 sign * kLiftStrideZ, 0.0, sign * kLiftStrideS, 0.0,      // w1_1_*
                                                 0.0, -sign * kLiftStrideZ * kTailMeanM,                  // b1

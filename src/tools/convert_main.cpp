@@ -6,12 +6,13 @@
 #include <string>
 
 #include "cli_args.h"
+#include "tool_formats.h"
 #include "trajectory_input.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/identification/structure/marker_model.h"
 #include "motion_model_estimation/io/model_yaml.h"
 #include "motion_model_estimation/io/trajectory_io.h"
-#include "motion_model_estimation/ros/trajectory_files.h"
+#include "motion_model_estimation/io/trajectory_io.h"
 
 namespace {
 
@@ -96,4 +97,7 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) { return mme::runTool("convert", run, argc, argv); }
+int main(int argc, char** argv) {
+  mme::registerToolFormats();
+  return mme::runTool("convert", run, argc, argv);
+}

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "cli_args.h"
+#include "tool_formats.h"
 #include "trajectory_input.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/identification/estimators/prediction_error.h"
@@ -77,4 +78,7 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) { return mme::runTool("evaluate", run, argc, argv); }
+int main(int argc, char** argv) {
+  mme::registerToolFormats();
+  return mme::runTool("evaluate", run, argc, argv);
+}

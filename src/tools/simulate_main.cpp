@@ -4,11 +4,12 @@
 #include <iostream>
 
 #include "cli_args.h"
+#include "tool_formats.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/io/model_yaml.h"
 #include "motion_model_estimation/io/trajectory_io.h"
-#include "motion_model_estimation/ros/trajectory_files.h"
+#include "motion_model_estimation/io/trajectory_io.h"
 #include "motion_model_estimation/scenes/scenes.h"
 
 namespace {
@@ -88,4 +89,7 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) { return mme::runTool("simulate", run, argc, argv); }
+int main(int argc, char** argv) {
+  mme::registerToolFormats();
+  return mme::runTool("simulate", run, argc, argv);
+}

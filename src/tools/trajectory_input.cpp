@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "motion_model_estimation/core/error.h"
-#include "motion_model_estimation/ros/trajectory_files.h"
+#include "motion_model_estimation/io/trajectory_io.h"
 
 namespace mme {
 

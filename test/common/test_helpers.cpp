@@ -11,26 +11,9 @@
 namespace mme {
 namespace test {
 
-Param valueParam(double value, bool free) {
-  Param p;
-  p.present = true;
-  p.has_value = true;
-  p.value = value;
-  p.free = free;
-  return p;
-}
-
 int addParticle(Model* model, const Eigen::Vector3d& x, double mass_kg, bool fixed,
                 const std::string& group, const Eigen::Vector3d& v) {
-  Particle p;
-  p.name = "p" + std::to_string(model->particles.size());
-  p.mass_kg = mass_kg;
-  p.position_m = x;
-  p.velocity_mps = v;
-  p.fixed = fixed;
-  p.group = group;
-  model->particles.push_back(p);
-  return static_cast<int>(model->particles.size()) - 1;
+  return mme::addParticle(model, x, {"", mass_kg, v, fixed, group});
 }
 
 int addType(Model* model, const std::string& name, BondKind kind,
@@ -41,13 +24,6 @@ int addType(Model* model, const std::string& name, BondKind kind,
   for (const auto& p : params) t.param(p.first) = valueParam(p.second, free);
   model->bond_types.push_back(t);
   return static_cast<int>(model->bond_types.size()) - 1;
-}
-
-void addBond(Model* model, int type, int a, int b, int c) {
-  Bond bond;
-  bond.type = type;
-  bond.particles = {{a, b, c}};
-  model->bonds.push_back(bond);
 }
 
 std::string nameBond(Model* model, int bond, const std::string& name) {

@@ -12,6 +12,7 @@
 #include <memory>
 
 #include "motion_model_estimation/core/model.h"
+#include "motion_model_estimation/core/model_builder.h"
 #include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/trajectory.h"
 #include "motion_model_estimation/identification/estimators/prediction_error.h"
@@ -19,15 +20,15 @@
 namespace mme {
 namespace test {
 
-/// A present parameter with a value (free or fixed, no bounds).
-Param valueParam(double value, bool free = false);
-/// Adds a particle named "p<index>"; returns its index.
+using mme::addBond;     // core/model_builder.h
+using mme::valueParam;  // core/model_builder.h
+/// Adds a particle named "p<index>" (core/model_builder.h's addParticle with the arguments the
+/// tests use most); returns its index.
 int addParticle(Model* model, const Eigen::Vector3d& x, double mass_kg = 1.0, bool fixed = false,
                 const std::string& group = "", const Eigen::Vector3d& v = Eigen::Vector3d::Zero());
 /// Adds a bond type with the given parameter values (all free or all fixed); returns its index.
 int addType(Model* model, const std::string& name, BondKind kind,
             std::initializer_list<std::pair<ParamId, double>> params, bool free = true);
-void addBond(Model* model, int type, int a, int b = -1, int c = -1);
 /// Names bond `bond` (so that a muscle can read it); returns the name.
 std::string nameBond(Model* model, int bond, const std::string& name);
 /// Adds a muscle type: stiffness [N/m], rest length [m], damping [N s/m], gain [N] and the

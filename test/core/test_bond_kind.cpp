@@ -75,4 +75,29 @@ TEST(BondKind, EveryParameterHasADistinctKey) {
   EXPECT_STREQ(mme::paramKey(mme::kGain), "gain");
 }
 
+// The parameter catalogue: an entry per id, in id order, with its key; the facts the search
+// space, the equation error and structure selection read agree with the physics they encode.
+TEST(ParamInfo, OneEntryPerParameterWithItsFacts) {
+  for (int id = 0; id < mme::kParamCount; ++id) {
+    const mme::ParamInfo& info = mme::paramInfo(static_cast<mme::ParamId>(id));
+    EXPECT_EQ(info.id, id);
+    EXPECT_STREQ(info.key, mme::paramKey(info.id));
+    EXPECT_STRNE(info.unit, "");
+    // A length-like parameter is a positive magnitude searched in log space.
+    if (info.length_like) EXPECT_TRUE(info.log_search && info.physically_positive) << info.key;
+  }
+  EXPECT_TRUE(mme::paramInfo(mme::kRestLength).length_like);
+  EXPECT_TRUE(mme::paramInfo(mme::kMaxDistance).length_like);
+  EXPECT_FALSE(mme::paramInfo(mme::kStiffness).length_like);
+  // Signed parameters: a rest angle, a floor height (both searched linearly), a cubic stiffness
+  // (a softening spring is physical; the search covers the stiffening side in log space).
+  EXPECT_FALSE(mme::paramInfo(mme::kRestAngle).log_search);
+  EXPECT_FALSE(mme::paramInfo(mme::kHeight).log_search);
+  EXPECT_FALSE(mme::paramInfo(mme::kStiffnessNl).physically_positive);
+  EXPECT_TRUE(mme::paramInfo(mme::kStiffnessNl).log_search);
+  EXPECT_TRUE(mme::paramInfo(mme::kDamping).physically_positive);
+  EXPECT_STREQ(mme::paramInfo(mme::kStiffness).unit, "N/m");
+  EXPECT_STREQ(mme::paramInfo(mme::kActivationTime).unit, "s");
+}
+
 }  // namespace

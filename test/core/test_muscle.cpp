@@ -181,9 +181,9 @@ TEST(Muscle, AnOccludedInputDropsTheMusclesTerms) {
   Model m;
   m.frame_rate_hz = 100;
   addParticle(&m, Vector3d(0, 0, 0), 1.0, false, "", Vector3d(0.1, 0, 0));
-  addParticle(&m, Vector3d(0.3, 0, 0));
-  addParticle(&m, Vector3d(0, 1, 0));
-  addParticle(&m, Vector3d(0.3, 1, 0));
+  mme::addParticle(&m, Vector3d(0.3, 0, 0));
+  mme::addParticle(&m, Vector3d(0, 1, 0));
+  mme::addParticle(&m, Vector3d(0.3, 1, 0));
   const int s = addType(&m, "s", BondKind::kSpring, {{mme::kStiffness, 10.0}, {mme::kRestLength, 0.25}});
   addBond(&m, s, 0, 1);
   nameBond(&m, 0, "in");

@@ -144,7 +144,7 @@ TEST(TrajectoryIo, FileExtension) {
 TEST_F(TrcTest, UnknownExtensionNamesFileAndExtension) {
   const std::string path = write("walk.csv", "1,2,3\n");
   expectInputError([&] { readTrajectoryFile(path); },
-                   {"walk.csv", "unsupported trajectory file extension '.csv'", ".bag"});
+                   {"walk.csv", "unsupported trajectory file extension '.csv'", ".trc", ".c3d"});
   expectInputError([&] { readTrajectoryFile(dir_ + "/noext"); }, {"noext", "''"});
 }
 

@@ -12,8 +12,8 @@
 
 namespace {
 
-mme::StructureOptions quickOptions() {
-  mme::StructureOptions o;
+mme::PipelineOptions quickOptions() {
+  mme::PipelineOptions o;
   o.identify.es.threads = 1;
   o.identify.generations = 50;
   return o;
@@ -74,8 +74,8 @@ TEST(StructureJob, AnUnusableWindowFailsWithTheReason) {
 TEST(StructureJob, ACutSelectionOnTheCrashWindowChoosesAndIsFlagged) {
   const mme::Trajectory data =
       mme::sliceFrames(mme::readTrajectoryFile(std::string(MME_TEST_DATA_DIR) + "/crash/window_0_99.trc"), 0, 80);
-  mme::StructureOptions options = quickOptions();
-  options.max_wall_time_s = 1e-9;
+  mme::PipelineOptions options = quickOptions();
+  options.identify.max_wall_time_s = 1e-9;
   mme::StructureJob job(mme::markerModel(data), options, 80);
   const std::optional<mme::StructureResult> r = job.runIfDue(data);
   ASSERT_TRUE(r.has_value()) << job.lastError();

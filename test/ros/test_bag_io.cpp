@@ -14,9 +14,10 @@
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/trajectory.h"
+#include "motion_model_estimation/ros/bag_format.h"
 #include "motion_model_estimation/ros/bag_io.h"
 #include "motion_model_estimation/ros/conversions.h"
-#include "motion_model_estimation/ros/trajectory_files.h"
+#include "motion_model_estimation/io/trajectory_io.h"
 
 namespace {
 
@@ -192,6 +193,7 @@ void expectSameCapture(const mme::Trajectory& in, const mme::Trajectory& out, do
 }
 
 TEST(TrajectoryFiles, RealCapturesWithGapsRoundTripThroughBagAndTrc) {
+  mme::registerBagFormat();
   for (const char* file : {"Sample26_Walking_Hybrid_1_1.c3d", "motion_capture_walk.trc",
                            "Sample01_Eb015pi.c3d"}) {
     SCOPED_TRACE(file);
@@ -217,6 +219,7 @@ TEST(TrajectoryFiles, RealCapturesWithGapsRoundTripThroughBagAndTrc) {
 }
 
 TEST(TrajectoryFiles, UnknownExtensionsAndEmptyTopicAreRefusedByName) {
+  mme::registerBagFormat();
   const mme::Trajectory t = makeTrajectory();
   try {
     mme::writeTrajectory(tempPath("x.csv"), t);

@@ -40,6 +40,26 @@ enum ParamId : int {
 /// YAML key / parameter-name suffix of a ParamId ("stiffness", "rest_length", ...).
 const char* paramKey(ParamId id);
 
+/// What is fixed about one parameter kind: the one table the search space, the equation error,
+/// structure selection and the model file read, so that they cannot disagree.
+struct ParamInfo {
+  ParamId id;
+  const char* key;   ///< paramKey()
+  const char* unit;  ///< on a pair bond (flexion: per radian instead of per metre)
+  /// Searched in log space by the evolution strategy (a magnitude whose scale is unknown: a
+  /// value near 0 and one of 1e4 are equally plausible).
+  bool log_search;
+  /// Physical only when > 0: an estimate <= 0 (e.g. from a linear solve) marks a bond the data
+  /// do not support. A cubic stiffness may be negative (a softening spring) although the
+  /// search covers the stiffening side only; a rest angle or a floor height has any sign.
+  bool physically_positive;
+  /// A distance between particles [m]: its default range and start come from the observed
+  /// bond lengths.
+  bool length_like;
+};
+/// The catalogue entry of a parameter kind (id < kParamCount).
+const ParamInfo& paramInfo(ParamId id);
+
 /// What is fixed about one bond kind.
 struct BondKindInfo {
   BondKind kind;

@@ -10,6 +10,7 @@
 #include "motion_model_estimation/core/model.h"
 #include "motion_model_estimation/core/trajectory.h"
 #include "motion_model_estimation/identification/search/evolution_strategy.h"
+#include "motion_model_estimation/identification/estimators/estimator_kind.h"
 #include "motion_model_estimation/identification/estimators/output_error.h"
 
 namespace mme {
@@ -76,16 +77,6 @@ struct Progress {
   std::vector<double> best_values;  ///< physical, in free-parameter order
 };
 
-/// What the data left undecided about a parameter.
-enum class ParameterFlag {
-  kNone,
-  kAtLowerBound,  ///< within 1 % of its lower search bound (the answer may lie beyond)
-  kAtUpperBound,  ///< within 1 % of its upper search bound
-  kUnidentifiable,  ///< the data do not determine it (output error: null space, or std > value)
-};
-/// "" | "at_lower_bound" | "at_upper_bound" | "unidentifiable".
-const char* parameterFlagName(ParameterFlag flag);
-
 struct IdentifyResult {
   std::vector<ParamRef> parameters;  ///< free parameters, in order
   std::vector<double> values;        ///< identified physical values
@@ -100,7 +91,7 @@ struct IdentifyResult {
   RefineStatus last_refine_status = RefineStatus::kNotRun;  ///< how the last refinement ended
   int bound_widenings = 0;           ///< searches resumed after widening default bounds
   std::vector<std::string> notes;    ///< what happened on the way (widened bounds, ...)
-  std::string estimator;             ///< the cost of the final answer: "short_term" | "output_error"
+  Estimator estimator = Estimator::kShortTerm;  ///< the cost of the final answer
   double noise_estimate_m = 0.0;     ///< estimateMarkerNoise() of the data
   double noise_std_m = 0.0;          ///< output error: from its residuals (else 0)
   int substeps = 1;                  ///< integration steps per frame the answer was fitted with

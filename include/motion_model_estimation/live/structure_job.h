@@ -10,7 +10,7 @@
 
 #include "motion_model_estimation/core/model.h"
 #include "motion_model_estimation/core/trajectory.h"
-#include "motion_model_estimation/identification/structure/structure_selection.h"
+#include "motion_model_estimation/pipeline/identify_pipeline.h"
 
 namespace mme {
 
@@ -18,10 +18,11 @@ class StructureJob {
  public:
   enum class State { kIdle, kPending, kRunning, kChosen, kFailed };
 
+  /// `options`: the pipeline's (its structure step runs; identify.max_wall_time_s bounds it).
   /// `min_frames`: the window length a selection waits for (at least the 35 frames selection
   /// needs: 20 fitted, 15 held out). `request_first`: the first selection is requested now
   /// (else on the first request()).
-  StructureJob(Model base, StructureOptions options, int min_frames, bool request_first = true);
+  StructureJob(Model base, PipelineOptions options, int min_frames, bool request_first = true);
 
   /// (Re)selects on the next window holding min_frames frames (thread-safe).
   void request();
@@ -36,14 +37,14 @@ class StructureJob {
   std::string status() const;
   std::string lastError() const;
   int minFrames() const { return min_frames_; }
-  /// Whether the time limit (StructureOptions::max_wall_time_s) cut the last selection that
+  /// Whether the time limit (PipelineOptions::identify.max_wall_time_s) cut the last selection that
   /// chose a model (thread-safe).
   bool lastCut() const;
   uint32_t selections() const;  ///< selections that chose a model
 
  private:
   Model base_;
-  StructureOptions options_;
+  PipelineOptions options_;
   int min_frames_;
   mutable std::mutex mutex_;
   bool requested_ = true;

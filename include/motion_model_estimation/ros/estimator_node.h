@@ -26,6 +26,7 @@
 #include "motion_model_estimation/MarkerFrame.h"
 #include "motion_model_estimation/identification/online/online_estimator.h"
 #include "motion_model_estimation/live/clock_jump_detector.h"
+#include "motion_model_estimation/live/estimator_node_options.h"
 #include "motion_model_estimation/live/latency_stats.h"
 #include "motion_model_estimation/live/marker_name_map.h"
 #include "motion_model_estimation/live/prediction_monitor.h"
@@ -36,43 +37,8 @@
 
 namespace mme {
 
-/// What arrives on `markers` (~input_type).
-enum class InputType {
-  kMarkers,     ///< motion_model_estimation/MarkerFrame
-  kPointCloud,  ///< sensor_msgs/PointCloud2, points in particle order, NaN = occluded
-  kVicon,       ///< vicon_bridge/Markers (millimetres), received as a ShapeShifter
-};
-
-/// ROS-side options (see config/estimator.yaml for meaning, units and defaults).
-struct EstimatorNodeOptions {
-  std::string model_path;
-  InputType input_type = InputType::kMarkers;
-  std::string bag;                     ///< read this bag instead of subscribing
-  std::string bag_topic;               ///< MarkerFrame topic in the bag ("" = the only one)
-  double bag_rate = 0.0;               ///< x real time; 0 = as fast as the estimator keeps up
-  std::string fixed_frame;             ///< "" = the model's frame_id
-  double update_rate_hz = 20.0;        ///< [Hz] most ~estimate messages per second
-  bool publish_markers = true;
-  BondColouring color_bonds_by = BondColouring::kStrain;
-  double particle_diameter_m = 0.02;
-  double tf_timeout_sec = 0.05;
-  bool vicon_qualify_with_subject = false;  ///< names "subject/marker" for vicon input
-  std::string model_dir;               ///< services only touch files under it ("" = ROS home)
-  std::string autosave_path;           ///< "" = off; relative paths are inside model_dir
-  double autosave_period_sec = 10.0;   ///< [s] between autosaves
-  std::string initial_model;           ///< resume from this model file when it exists
-  double prediction_period_sec = PredictionMonitor::kDefaultPeriodS;  ///< [s]; 0 = off
-  /// Choose the structure from the markers on the first full window and on ~reset; the model
-  /// may then hold the particles alone (structure_selection.h).
-  bool select_structure = false;
-  std::string structure_report_path = "structure_report.csv";  ///< inside model_dir
-  /// [s] wall time of one structure selection (0 = no limit): a cut selection chooses the best
-  /// level judged so far (StructureOptions::max_wall_time_s).
-  double structure_max_time_s = 120.0;
-  OnlineEstimatorOptions estimator;
-};
-
-/// Reads and validates every private param. Throws InputError naming the bad param.
+/// Reads and validates every private param (readEstimatorNodeOptions on the parameter server).
+/// Throws InputError naming the bad param.
 EstimatorNodeOptions readEstimatorOptions(const ros::NodeHandle& pnh);
 
 class EstimatorNode {

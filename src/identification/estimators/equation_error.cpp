@@ -394,7 +394,9 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
   return out;
 }
 
-bool physicalOnlyPositive(ParamId id) { return id != kRestAngle && id != kStiffnessNl; }
+bool physicalOnlyPositive(ParamId id) {
+  return id < kParamCount && paramInfo(id).physically_positive;
+}
 
 EquationErrorResult solveEquationError(const Model& model, const Trajectory& trajectory,
                                        const EquationErrorOptions& options) {

@@ -122,7 +122,7 @@ void OnlineEstimator::handOverRefinement() {
     es_->offer(output.genes);  // a good start for the global search too
   }
   ++refinements_done_;
-  last_refine_status_ = refineStatusName(result.status);
+  last_refine_status_ = result.status;
 }
 
 OnlineEstimator::OnlineEstimator(const Model& model, const OnlineEstimatorOptions& options)
@@ -343,7 +343,7 @@ bool OnlineEstimator::update() {
   e.local_costs = es_->best().local_costs;
   e.refinements = refinements_done_;
   e.last_refine_status = last_refine_status_;
-  e.estimator = "short_term";
+  e.estimator = Estimator::kShortTerm;
   std::vector<double> genes = es_->best().genes;
   const bool from_output_error = use_output_error_ && output_error_.ran;
   // 1-sigma from the spread of the elite (best fifth) of the population: cheap enough to do
@@ -368,19 +368,19 @@ bool OnlineEstimator::update() {
   }
   if (from_output_error) {
     // The published values are the output-error fit's, with its std (from its Jacobian).
-    e.estimator = "output_error";
+    e.estimator = Estimator::kOutputError;
     e.values = output_error_.values;
     e.std_devs = output_error_.std_devs;
     e.global_cost = output_error_.observation_cost_m2;
     e.noise_std_m = output_error_.noise_std_m;
     genes = output_error_.genes;
   }
-  e.parameter_flags.assign(e.values.size(), "");
+  e.parameter_flags.assign(e.values.size(), ParameterFlag::kNone);
   for (size_t k = 0; k < es_->space().size(); ++k) {
     const int side = es_->space().boundSide(k, genes[k]);
-    if (side < 0) e.parameter_flags[k] = "at_lower_bound";
-    else if (side > 0) e.parameter_flags[k] = "at_upper_bound";
-    else if (from_output_error && output_error_.unidentifiable[k]) e.parameter_flags[k] = "unidentifiable";
+    if (side < 0) e.parameter_flags[k] = ParameterFlag::kAtLowerBound;
+    else if (side > 0) e.parameter_flags[k] = ParameterFlag::kAtUpperBound;
+    else if (from_output_error && output_error_.unidentifiable[k]) e.parameter_flags[k] = ParameterFlag::kUnidentifiable;
   }
   // Stability: a long rollout of the best model from the window start keeps its free particles
   // near the box the window sees them in (RolloutBound, as evaluate judges; fixed ones, such as

@@ -11,14 +11,14 @@ namespace mme {
 
 namespace {
 
+/// The catalogue's facts (bond_kind.h) for a gene's parameter; a muscle's network parameters
+/// (ids from kParamCount on) are signed and linear.
 bool isLengthLike(int param) {
-  return param == kRestLength || param == kMinDistance || param == kMaxDistance;
+  return param < kParamCount && paramInfo(static_cast<ParamId>(param)).length_like;
 }
 
-/// Network weights and biases are signed; the muscle gain is positive (its sign would mirror
-/// the output weights'), so it is searched in log space like other magnitudes.
-bool isPositivePhysical(int param) {
-  return param != kRestAngle && param != kHeight && param < kParamCount;
+bool isLogSearched(int param) {
+  return param < kParamCount && paramInfo(static_cast<ParamId>(param)).log_search;
 }
 
 /// Default half-width of a floor height's search range around its guess (or 0) [m].
@@ -118,7 +118,7 @@ ParameterSpace::ParameterSpace(const Model& model, const Trajectory& trajectory)
     // Positive physical parameters are searched in log space; `min: 0` (non-negative) keeps
     // them there with the default lower bound (a value of exactly 0 is not representable, a
     // value 1e-8 of the range is).
-    g.log_scale = !is_gravity && isPositivePhysical(ref.param);
+    g.log_scale = !is_gravity && isLogSearched(ref.param);
     const bool user_min = p.has_min && !(g.log_scale && p.min <= 0.0);
     // Physical bounds: the model's when given, else defaults scaled by what is known.
     double lo, hi;

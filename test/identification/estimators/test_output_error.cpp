@@ -276,14 +276,14 @@ TEST(OutputError, TheIdentifierPicksTheEstimatorFromTheData) {
   mme::IdentifyOptions options = mme::identifyOptionsFor(mme::Preset::kDefault);
   options.estimate_std = false;
   const mme::IdentifyResult noisy = mme::identifyModel(n.search, n.noisy(1e-4, 5), options);
-  EXPECT_EQ(noisy.estimator, "output_error");
+  EXPECT_EQ(noisy.estimator, mme::Estimator::kOutputError);
   EXPECT_NEAR(noisy.noise_estimate_m, 1e-4, 1e-5);
   EXPECT_LT(maxRelativeError(noisy.values, n.true_values), 0.01);
   const mme::IdentifyResult clean = mme::identifyModel(n.search, n.clean, options);
-  EXPECT_EQ(clean.estimator, "short_term");
+  EXPECT_EQ(clean.estimator, mme::Estimator::kShortTerm);
   EXPECT_LT(maxRelativeError(clean.values, n.true_values), 1e-8);
   options.cost = mme::CostChoice::kShortTerm;
-  EXPECT_EQ(mme::identifyModel(n.search, n.noisy(1e-4, 5), options).estimator, "short_term");
+  EXPECT_EQ(mme::identifyModel(n.search, n.noisy(1e-4, 5), options).estimator, mme::Estimator::kShortTerm);
 }
 
 // A stiff scene (omega h = 0.5, the data integrated with 20 substeps per frame, the model file
@@ -324,7 +324,7 @@ TEST(OutputError, HeavyOcclusionGoesToTheOutputError) {
   mme::IdentifyOptions options = mme::identifyOptionsFor(mme::Preset::kDefault);
   options.estimate_std = false;
   const mme::IdentifyResult r = mme::identifyModel(n.search, data, options);
-  EXPECT_EQ(r.estimator, "output_error");
+  EXPECT_EQ(r.estimator, mme::Estimator::kOutputError);
   EXPECT_LT(maxRelativeError(r.values, n.true_values), 1e-6);
   options.cost = mme::CostChoice::kShortTerm;
   if (mme::ShortTermCost(n.search, data).termCount() == 0) {

@@ -75,8 +75,9 @@ TEST(OnlineEstimator, TheRefinementRunsBesideTheGenerationsAndIsHandedOver) {
   const mme::Estimate e = estimator.estimate();
   EXPECT_GE(e.refinements, 2u);
   // At the answer a further refinement finds nothing to improve ("no_progress").
-  EXPECT_TRUE(e.last_refine_status == "converged" || e.last_refine_status == "no_progress")
-      << e.last_refine_status;
+  EXPECT_TRUE(e.last_refine_status == mme::RefineStatus::kConverged ||
+              e.last_refine_status == mme::RefineStatus::kNoProgress)
+      << mme::refineStatusName(e.last_refine_status);
   EXPECT_LT(maxRelativeError(e.values, f.true_values), 1e-6) << e.global_cost;
 }
 

@@ -68,8 +68,8 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
 EquationErrorResult solveEquationError(const Model& model, const Trajectory& trajectory,
                                        const EquationErrorOptions& options = {});
 
-/// Whether a bond type's parameter is physical only when positive (solveEquationError's rule:
-/// every one but a flexion's rest angle and a cubic stiffness, which may soften).
+/// Whether a bond type's parameter is physical only when positive (the catalogue's
+/// ParamInfo::physically_positive, bond_kind.h; false for a muscle's network parameters).
 bool physicalOnlyPositive(ParamId id);
 
 }  // namespace mme

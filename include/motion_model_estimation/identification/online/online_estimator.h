@@ -58,14 +58,13 @@ std::string validateOptions(const OnlineEstimatorOptions& options);
 /// A snapshot of the current best model.
 struct Estimate {
   /// The refinement beside the generations: how many have been handed over and how the last
-  /// ended ("" before the first).
+  /// ended (kNotRun before the first).
   uint32_t refinements = 0;
-  std::string last_refine_status;
-  /// The cost of the published values: "short_term" (the population's best on this window) or
-  /// "output_error" (the last output-error fit, on the window it ran on).
-  std::string estimator;
-  /// Per parameter: "" | "at_lower_bound" | "at_upper_bound" | "unidentifiable".
-  std::vector<std::string> parameter_flags;
+  RefineStatus last_refine_status = RefineStatus::kNotRun;
+  /// The cost of the published values: kShortTerm (the population's best on this window) or
+  /// kOutputError (the last output-error fit, on the window it ran on).
+  Estimator estimator = Estimator::kShortTerm;
+  std::vector<ParameterFlag> parameter_flags;  ///< per parameter
   double noise_std_m = 0.0;         ///< output error: the marker noise its residuals show
   bool valid = false;               ///< false until the first update
   uint32_t generation = 0;
@@ -174,7 +173,7 @@ class OnlineEstimator {
   std::unique_ptr<BackgroundRefinement> refinement_;
   int last_refine_generation_ = -1;  // es_'s generation when the last refinement started
   uint32_t refinements_done_ = 0;
-  std::string last_refine_status_;
+  RefineStatus last_refine_status_ = RefineStatus::kNotRun;
   bool use_output_error_ = false;   // decided when the population starts
   OutputErrorResult output_error_;  // the last output-error fit (ran = false before the first)
   mutable std::mutex estimate_mutex_;  // guards estimate_ (readers never wait for an update)

@@ -1,0 +1,92 @@
+// The offline identification as one named pipeline: from a capture's markers to the model file,
+// step by step (the model the markers give, the structure, muscles placed on springs, the
+// passive identification, sensor muscles, the file's metadata). `identify` is this pipeline
+// behind a command line; the benchmarks and the node's structure job call the same steps, so
+// the order of the steps and what each hands to the next live here and nowhere else.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "motion_model_estimation/core/model.h"
+#include "motion_model_estimation/core/trajectory.h"
+#include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/identification/muscles/muscle_placement.h"
+#include "motion_model_estimation/identification/muscles/sensor_muscles.h"
+#include "motion_model_estimation/identification/structure/structure_selection.h"
+
+namespace mme {
+
+/// Which steps run and how. Each optional step runs when its options are set.
+struct PipelineOptions {
+  IdentifyOptions identify;  ///< the passive identification (also the structure's refits)
+  /// Choose the bonds from the markers first (structure_selection.h), within
+  /// identify.max_wall_time_s.
+  bool select_structure = false;
+  /// Turn the model's plain spring types into muscles before the identification
+  /// (muscle_placement.h).
+  std::optional<MusclePlacement> muscles;
+  /// Fit sensor muscles on the identified model last (sensor_muscles.h); kept only where they
+  /// predict the held-out frames better than the passive model.
+  std::optional<SensorMuscleOptions> sensor_muscles;
+  /// One line per step for a person (the structure's levels, the muscles' steps); may be empty.
+  std::function<void(const std::string&)> say;
+  /// Something the user should know that does not stop the run (e.g. muscles not kept); may be
+  /// empty.
+  std::function<void(const std::string&)> warn;
+  /// After every generation of the passive identification (identifyModel); may be empty.
+  std::function<void(const Progress&)> progress;
+  /// Right after the structure step, before anything else runs (e.g. to keep its report should
+  /// the run be stopped later); may be empty.
+  std::function<void(const StructureResult&)> structure_chosen;
+  /// With the model and data the passive identification is about to search; may be empty.
+  std::function<void(const Model&, const Trajectory&)> identification_starts;
+};
+
+/// "" when the options can run, else what is wrong, naming the option.
+std::string validateOptions(const PipelineOptions& options);
+
+/// What every step left.
+struct PipelineResult {
+  Model model;  ///< what the file gets: the identified model, with sensor muscles where kept
+  std::optional<StructureResult> structure;  ///< the structure step's report
+  int muscle_types = 0;                      ///< spring types the muscles step turned into muscles
+  IdentifyResult identified;                 ///< the passive identification
+  std::optional<SensorMuscleResult> sensor_muscles;  ///< the sensor muscles' fit, when it ran
+  std::string sensor_muscle_summary;  ///< one line on that fit (empty when it did not run)
+  std::vector<std::string> notes;     ///< written into the file's `identification: notes:`
+};
+
+// ------------------------------------------------------------------ the steps, in order
+
+/// Step 1 without a model file: the markers are the particles (1 kg each, free gravity; no
+/// bonds), for the structure step to add them (marker_model.h).
+Model startingModel(const Trajectory& data);
+
+/// Step 2: the structure chosen from the markers; the model's own bonds stay.
+/// `trajectory` holds the model's particles as markers (remapMarkers).
+StructureResult chooseStructure(const Model& model, const Trajectory& trajectory,
+                                const PipelineOptions& options);
+
+/// Step 3: plain spring types become muscle types reading their nearest bonds. InputError when
+/// the model has no spring type that can become a muscle.
+Model placeMuscles(const Model& model, const Trajectory& trajectory, const MusclePlacement& placement);
+
+/// Step 4: the passive identification (identifyModel with the options' progress).
+IdentifyResult identifyPassive(const Model& model, const Trajectory& trajectory,
+                               const PipelineOptions& options);
+
+/// Step 5: sensor muscles on the identified model; on data they cannot use (too few frames, no
+/// pair seen together often enough) nothing, with the reason in `result->notes` and warned.
+/// Fills result->sensor_muscles, sensor_muscle_summary and, where kept, result->model.
+void fitSensorMuscleStep(const Trajectory& trajectory, const PipelineOptions& options,
+                         PipelineResult* result);
+
+/// Every step the options ask for, in order, from `model` (a model file's, or startingModel's)
+/// and the trajectory matched to its particles.
+PipelineResult runPipeline(const Model& model, const Trajectory& trajectory,
+                           const PipelineOptions& options);
+
+}  // namespace mme

@@ -1,0 +1,134 @@
+#include "motion_model_estimation/pipeline/identify_pipeline.h"
+
+#include <cstdio>
+#include <utility>
+
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/muscle.h"
+#include "motion_model_estimation/identification/structure/marker_model.h"
+
+namespace mme {
+
+namespace {
+
+void say(const PipelineOptions& options, const std::string& line) {
+  if (options.say) options.say(line);
+}
+
+void warn(const PipelineOptions& options, const std::string& line) {
+  if (options.warn) options.warn(line);
+}
+
+/// One line on a sensor-muscle fit: what was chosen, how it predicts, whether it is kept.
+std::string sensorMuscleSummary(const SensorMuscleResult& sm, const SensorMuscleOptions& options) {
+  char line[640];
+  std::snprintf(line, sizeof(line),
+                "sensor muscles: %d sensors, %d muscles, ridge %.0e, %d rollout round(s), "
+                "activation time constant %.3g s, %s anchors; %d frames ahead on the last frames "
+                "%.3g m (passive %.3g m, constant velocity %.3g m), %.0f s%s%s%s",
+                sm.sensors, sm.muscles, sm.ridge, sm.candidates[sm.chosen].rollout_rounds,
+                sm.activation_time_s, sm.anchors ? "with" : "without", options.horizon_frames,
+                sm.validation_rms_m, sm.passive_rms_m, sm.constant_velocity_rms_m, sm.wall_time_s,
+                sm.stopped_by_time ? " (stopped by --muscles-max-time-s: fewer candidates judged)" : "",
+                !sm.anchors ? ""
+                : sm.anchor_stiffness ? "; the anchor muscles with a stiffness of their own"
+                                      : "; the anchor muscles without a stiffness of their own",
+                sm.better_than_passive ? "" : ": not better than the passive model, which is kept");
+  return line;
+}
+
+}  // namespace
+
+std::string validateOptions(const PipelineOptions& options) {
+  std::string bad = validateOptions(options.identify);
+  if (!bad.empty()) return bad;
+  if (options.muscles) {
+    if (options.muscles->inputs < 0 || options.muscles->inputs > kMaxMuscleInputs)
+      return "muscles: inputs must be 0.." + std::to_string(kMaxMuscleInputs);
+    if (options.muscles->hidden < 0 || options.muscles->hidden > kMaxMuscleHidden)
+      return "muscles: hidden units must be 0.." + std::to_string(kMaxMuscleHidden);
+  }
+  if (options.sensor_muscles &&
+      (options.sensor_muscles->sensors < 1 || options.sensor_muscles->sensors > kMaxMuscleInputs))
+    return "sensor muscles: sensors must be 1.." + std::to_string(kMaxMuscleInputs);
+  return "";
+}
+
+Model startingModel(const Trajectory& data) { return markerModel(data); }
+
+StructureResult chooseStructure(const Model& model, const Trajectory& trajectory,
+                                const PipelineOptions& options) {
+  StructureOptions so;
+  so.identify = options.identify;
+  so.max_wall_time_s = options.identify.max_wall_time_s;
+  so.progress = options.say;
+  return selectStructure(model, trajectory, so);
+}
+
+Model placeMuscles(const Model& model, const Trajectory& trajectory, const MusclePlacement& placement) {
+  Model placed = addMuscles(model, &trajectory, placement);
+  if (muscleTypeCount(placed) == 0)
+    throw InputError("muscles: the model has no spring type that can become a muscle (plain "
+                     "springs: no threshold, no cubic term, not an interaction)");
+  return placed;
+}
+
+IdentifyResult identifyPassive(const Model& model, const Trajectory& trajectory,
+                               const PipelineOptions& options) {
+  return identifyModel(model, trajectory, options.identify, options.progress);
+}
+
+void fitSensorMuscleStep(const Trajectory& trajectory, const PipelineOptions& options,
+                         PipelineResult* result) {
+  // The options were checked before the run, so what fails here is the data's (too few frames,
+  // no pair seen together often enough, a body too large): the passive model stays the answer,
+  // with a warning, rather than the run being lost.
+  SensorMuscleOptions sensor_options = *options.sensor_muscles;
+  if (!sensor_options.progress) sensor_options.progress = options.say;
+  try {
+    result->sensor_muscles = addSensorMuscles(result->identified.model, trajectory, sensor_options);
+  } catch (const InputError& e) {
+    warn(options, std::string("no sensor muscles (") + e.what() + "): the passive model is written");
+    result->notes.push_back(std::string("sensor muscles: none (") + e.what() + ")");
+    return;
+  }
+  const SensorMuscleResult& sm = *result->sensor_muscles;
+  result->sensor_muscle_summary = sensorMuscleSummary(sm, sensor_options);
+  result->notes.push_back(result->sensor_muscle_summary);
+  if (sm.better_than_passive)
+    result->model = sm.model;
+  else
+    warn(options, "the sensor muscles are not kept (" + sm.not_kept_because +
+                      "): the passive model is written");
+}
+
+PipelineResult runPipeline(const Model& model, const Trajectory& trajectory,
+                           const PipelineOptions& options) {
+  const std::string bad = validateOptions(options);
+  if (!bad.empty()) throw InputError(bad);
+  PipelineResult result;
+  Model current = model;
+  if (options.select_structure) {
+    result.structure = chooseStructure(current, trajectory, options);
+    current = result.structure->model;
+    if (options.structure_chosen) options.structure_chosen(*result.structure);
+  }
+  if (options.muscles) {
+    current = placeMuscles(current, trajectory, *options.muscles);
+    result.muscle_types = muscleTypeCount(current);
+    int reads = 0;
+    for (const BondType& type : current.bond_types)
+      if (type.kind == BondKind::kMuscle) reads = type.network_inputs;
+    say(options, std::to_string(result.muscle_types) + " spring type(s) became muscles reading " +
+                     std::to_string(reads) + " bond(s) each, " +
+                     std::to_string(options.muscles->hidden) + " hidden unit(s)");
+  }
+  if (options.identification_starts) options.identification_starts(current, trajectory);
+  result.identified = identifyPassive(current, trajectory, options);
+  result.model = result.identified.model;
+  result.notes = result.identified.notes;
+  if (options.sensor_muscles) fitSensorMuscleStep(trajectory, options, &result);
+  return result;
+}
+
+}  // namespace mme

@@ -1,0 +1,134 @@
+// estimator_node's options without a ROS master (live/estimator_node_options.h): the documented
+// defaults, every check naming the parameter it refuses, the preset and what overrides it, and
+// a parameter of the wrong type refused by name.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <string>
+#include <variant>
+
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/live/estimator_node_options.h"
+
+namespace {
+
+/// Parameters as a map; a value of another type than asked for is "the wrong type", as on the
+/// parameter server.
+class MapSource : public mme::ParameterSource {
+ public:
+  using Value = std::variant<std::string, double, int, bool>;
+  std::map<std::string, Value> values;
+
+  bool get(const std::string& name, std::string* v) const override { return read(name, v); }
+  bool get(const std::string& name, double* v) const override {
+    const auto it = values.find(name);
+    if (it != values.end() && std::holds_alternative<int>(it->second)) {  // as XmlRpc does
+      *v = std::get<int>(it->second);
+      return true;
+    }
+    return read(name, v);
+  }
+  bool get(const std::string& name, int* v) const override { return read(name, v); }
+  bool get(const std::string& name, bool* v) const override { return read(name, v); }
+
+ private:
+  template <typename T>
+  bool read(const std::string& name, T* v) const {
+    const auto it = values.find(name);
+    if (it == values.end()) return false;
+    if (!std::holds_alternative<T>(it->second)) throw mme::InputError("~" + name + " has the wrong type");
+    *v = std::get<T>(it->second);
+    return true;
+  }
+};
+
+MapSource withModel() {
+  MapSource s;
+  s.values["model"] = std::string("m.yaml");
+  s.values["model_dir"] = std::string("/tmp/models");
+  return s;
+}
+
+/// The InputError's message for `source`, or "" when the options are accepted.
+std::string refusal(const MapSource& source) {
+  try {
+    mme::readEstimatorNodeOptions(source);
+  } catch (const mme::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(EstimatorNodeOptions, DefaultsAreTheDocumentedOnes) {
+  const mme::EstimatorNodeOptions o = mme::readEstimatorNodeOptions(withModel());
+  EXPECT_EQ(o.model_path, "m.yaml");
+  EXPECT_EQ(o.input_type, mme::InputType::kMarkers);
+  EXPECT_EQ(o.update_rate_hz, 20.0);
+  EXPECT_EQ(o.structure_max_time_s, 120.0);
+  EXPECT_FALSE(o.select_structure);
+  EXPECT_EQ(o.model_dir, "/tmp/models");
+  EXPECT_EQ(o.estimator.es.offspring, o.estimator.es.population);
+  EXPECT_LE(o.estimator.min_frames, o.estimator.window_frames);
+}
+
+TEST(EstimatorNodeOptions, EveryCheckNamesItsParameter) {
+  EXPECT_EQ(refusal(MapSource()), "~model is required (path to a model file)");
+  struct Case {
+    const char* name;
+    MapSource::Value value;
+    const char* message;
+  };
+  const Case cases[] = {
+      {"input_type", std::string("lidar"), "~input_type must be markers, pointcloud or vicon, got 'lidar'"},
+      {"bag_rate", -1.0, "~bag_rate must be >= 0"},
+      {"update_rate_hz", 0.0, "~update_rate_hz must be in (0, 1000]"},
+      {"color_bonds_by", std::string("mood"), "~color_bonds_by must be strain or local_cost"},
+      {"particle_diameter_m", 0.0, "~particle_diameter_m must be > 0"},
+      {"autosave_period_sec", 0.0, "~autosave_period_sec must be > 0"},
+      {"structure_report_path", std::string(""), "~structure_report_path must not be empty"},
+      {"structure_max_time_sec", -1.0, "~structure_max_time_sec must be >= 0 (0 = no limit)"},
+      {"window_frames", 2, "~window_frames must be >= 3"},
+      {"min_frames", 2, "~min_frames must be in [3, ~window_frames]"},
+      {"population", 1, "~population must be >= 2"},
+      {"seed", -1, "~seed must be >= 0"},
+      {"threads", 0, "~threads must be in [1, 256]"},
+      {"preset", std::string("fast"), "~preset must be default or paper, got 'fast'"},
+      {"cost", std::string("l1"), "~cost must be auto, short_term or output_error, got 'l1'"},
+      {"refine_period", -1, "~refine_start_generation and ~refine_period must be >= 0"},
+  };
+  for (const Case& c : cases) {
+    MapSource s = withModel();
+    s.values[c.name] = c.value;
+    EXPECT_EQ(refusal(s), c.message) << c.name;
+  }
+}
+
+TEST(EstimatorNodeOptions, StructureSelectionNeedsALongEnoughWindow) {
+  MapSource s = withModel();
+  s.values["select_structure"] = true;
+  s.values["window_frames"] = 30;
+  EXPECT_EQ(refusal(s), "~select_structure needs ~window_frames >= 35 (20 frames fitted, 15 held out)");
+  s.values["window_frames"] = 40;
+  EXPECT_EQ(refusal(s), "");
+}
+
+TEST(EstimatorNodeOptions, ThePaperPresetAndWhatOverridesIt) {
+  MapSource s = withModel();
+  s.values["preset"] = std::string("paper");
+  const mme::EstimatorNodeOptions paper = mme::readEstimatorNodeOptions(s);
+  EXPECT_EQ(paper.estimator.cost, mme::CostChoice::kShortTerm);
+  EXPECT_EQ(paper.estimator.es.refine_algorithm, mme::RefineAlgorithm::kBobyqa);
+  s.values["cost"] = std::string("output_error");
+  s.values["refine_algorithm"] = std::string("levenberg_marquardt");
+  const mme::EstimatorNodeOptions overridden = mme::readEstimatorNodeOptions(s);
+  EXPECT_EQ(overridden.estimator.cost, mme::CostChoice::kOutputError);
+  EXPECT_EQ(overridden.estimator.es.refine_algorithm, mme::RefineAlgorithm::kLevenbergMarquardt);
+}
+
+TEST(EstimatorNodeOptions, AParameterOfTheWrongTypeIsRefusedByName) {
+  MapSource s = withModel();
+  s.values["window_frames"] = std::string("many");
+  EXPECT_EQ(refusal(s), "~window_frames has the wrong type");
+}
+
+}  // namespace

@@ -1,0 +1,147 @@
+// The offline pipeline (pipeline/identify_pipeline.h) and the metadata of its result
+// (pipeline/result_metadata.h): the steps run in order and hand on what the next needs, a
+// step the data cannot feed leaves the answer before it with a warning, and the file's
+// `identification:` block says what the result holds.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/pipeline/identify_pipeline.h"
+#include "motion_model_estimation/pipeline/result_metadata.h"
+#include "motion_model_estimation/scenes/random_object.h"
+#include "test_helpers.h"
+
+namespace {
+
+mme::Model smallRandomObject() {
+  mme::RandomObjectSpec spec;
+  spec.particles = 8;
+  spec.bond_types = 2;
+  spec.bonds = 12;
+  return mme::makeRandomObject(spec);
+}
+
+mme::PipelineOptions quickOptions() {
+  mme::PipelineOptions o;
+  o.identify.es.threads = 1;
+  o.identify.generations = 60;
+  return o;
+}
+
+// From the particles alone: the structure step chooses bonds, its hook runs before the
+// identification starts, and the identification fits the chosen model's parameters.
+TEST(IdentifyPipeline, StructureThenIdentificationInOrder) {
+  const mme::Model truth = smallRandomObject();
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 100, truth.frame_rate_hz);
+  mme::PipelineOptions o = quickOptions();
+  o.select_structure = true;
+  std::vector<std::string> events;
+  o.structure_chosen = [&](const mme::StructureResult& r) {
+    events.push_back("structure " + std::to_string(r.model.bonds.size()));
+  };
+  o.identification_starts = [&](const mme::Model& m, const mme::Trajectory& t) {
+    events.push_back("identify " + std::to_string(m.bonds.size()));
+    EXPECT_EQ(t.numFrames(), data.numFrames());
+  };
+  const mme::PipelineResult r = mme::runPipeline(mme::test::particlesOnly(truth), data, o);
+  ASSERT_TRUE(r.structure.has_value());
+  ASSERT_EQ(events.size(), 2u);
+  const std::string bonds = std::to_string(r.structure->model.bonds.size());
+  EXPECT_EQ(events[0], "structure " + bonds);
+  EXPECT_EQ(events[1], "identify " + bonds);
+  EXPECT_FALSE(r.structure->model.bonds.empty());
+  EXPECT_EQ(r.model.bonds.size(), r.structure->model.bonds.size());
+  EXPECT_EQ(r.identified.parameters.size(), mme::freeParameters(r.structure->model).size());
+  EXPECT_FALSE(r.sensor_muscles.has_value());
+  EXPECT_TRUE(r.sensor_muscle_summary.empty());
+  // The file gets the identified values.
+  for (size_t k = 0; k < r.identified.parameters.size(); ++k)
+    EXPECT_EQ(mme::paramOf(r.model, r.identified.parameters[k]).value, r.identified.values[k]);
+}
+
+// Sensor muscles on data too short for them: the passive model is the answer, the reason is
+// warned about and noted in the file.
+TEST(IdentifyPipeline, SensorMusclesTheDataCannotFeedLeaveThePassiveModel) {
+  const mme::Model truth = mme::test::smallObject();
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 40, truth.frame_rate_hz);
+  mme::PipelineOptions o = quickOptions();
+  o.sensor_muscles = mme::SensorMuscleOptions();
+  std::vector<std::string> warnings;
+  o.warn = [&](const std::string& line) { warnings.push_back(line); };
+  const mme::PipelineResult r = mme::runPipeline(mme::test::withoutValues(truth), data, o);
+  EXPECT_FALSE(r.sensor_muscles.has_value());
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("no sensor muscles ("), std::string::npos) << warnings[0];
+  ASSERT_FALSE(r.notes.empty());
+  EXPECT_EQ(r.notes.back().rfind("sensor muscles: none (", 0), 0u) << r.notes.back();
+  EXPECT_EQ(r.model.bonds.size(), truth.bonds.size());
+  EXPECT_EQ(mme::muscleTypeCount(r.model), 0);
+}
+
+TEST(IdentifyPipeline, MusclesNeedASpringType) {
+  mme::Model model;
+  mme::test::addParticle(&model, Eigen::Vector3d(0, 0, 0));
+  mme::test::addParticle(&model, Eigen::Vector3d(1, 0, 0));
+  const mme::Trajectory data = mme::simulateTrajectory(model, 20, 100.0);
+  EXPECT_THROW(mme::placeMuscles(model, data, mme::MusclePlacement{}), mme::InputError);
+}
+
+TEST(IdentifyPipeline, BadOptionsAreNamed) {
+  mme::PipelineOptions o = quickOptions();
+  EXPECT_EQ(mme::validateOptions(o), "");
+  o.sensor_muscles = mme::SensorMuscleOptions();
+  o.sensor_muscles->sensors = 0;
+  EXPECT_NE(mme::validateOptions(o).find("sensor muscles"), std::string::npos);
+  o.sensor_muscles.reset();
+  o.muscles = mme::MusclePlacement{};
+  o.muscles->hidden = -1;
+  EXPECT_NE(mme::validateOptions(o).find("hidden"), std::string::npos);
+  const mme::Model truth = mme::test::smallObject();
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 40, truth.frame_rate_hz);
+  EXPECT_THROW(mme::runPipeline(truth, data, o), mme::InputError);
+}
+
+// One block for offline and live results: method names, a std where finite, a flag where set.
+TEST(ResultMetadata, OfflineAndLiveResultsSayTheSameThings) {
+  mme::IdentifyResult r;
+  r.parameters = {mme::ParamRef{}, mme::ParamRef{}};
+  r.parameters[0].name = "s/stiffness";
+  r.parameters[1].name = "s/damping";
+  r.values = {10.0, 0.1};
+  r.std_devs = {0.5, std::nan("")};
+  r.flags = {mme::ParameterFlag::kNone, mme::ParameterFlag::kAtLowerBound};
+  r.estimator = mme::Estimator::kOutputError;
+  r.global_cost = 2e-6;
+  r.frames = 90;
+  r.generations = 12;
+  const mme::IdentificationInfo offline = mme::identificationInfo(r, {"a note"});
+  EXPECT_EQ(offline.method, "es+output_error");
+  EXPECT_EQ(offline.std_names, std::vector<std::string>{"s/stiffness"});
+  EXPECT_EQ(offline.std_values, std::vector<double>{0.5});
+  ASSERT_EQ(offline.flags.size(), 1u);
+  EXPECT_EQ(offline.flags[0].first, "s/damping");
+  EXPECT_EQ(offline.flags[0].second, "at_lower_bound");
+  EXPECT_EQ(offline.notes, std::vector<std::string>{"a note"});
+  EXPECT_EQ(offline.frames, 90);
+
+  mme::Estimate e;
+  e.parameter_names = {"s/stiffness", "s/damping"};
+  e.values = r.values;
+  e.std_devs = r.std_devs;
+  e.parameter_flags = r.flags;
+  e.estimator = mme::Estimator::kShortTerm;
+  e.window_frames = 90;
+  e.generation = 12;
+  const mme::IdentificationInfo live = mme::identificationInfo(e);
+  EXPECT_EQ(live.method, "es-online");
+  EXPECT_EQ(live.std_names, offline.std_names);
+  EXPECT_EQ(live.flags, offline.flags);
+  EXPECT_EQ(live.frames, 90);
+  EXPECT_EQ(mme::methodName(mme::Estimator::kOutputError, true), "es-online+output_error");
+}
+
+}  // namespace
