@@ -1,0 +1,46 @@
+// The sensor muscles' least-squares fit: ridge-regularised normal equations in scaled columns,
+// solved by Cholesky with every muscle's own stiffness and damping held >= 0 (an active set).
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace mme::sensor_muscles {
+
+/// The equation error's normal equations in the scaled columns.
+struct System {
+  Eigen::MatrixXd ata;
+  Eigen::VectorXd atb;
+  size_t rows = 0;
+  double btb = 0.0;
+};
+
+/// Gives an empty system its zero normal equations of `unknowns` columns.
+void sizeSystem(int unknowns, System* sys);
+
+/// The mean diagonal of a system's normal matrix (the ridges' reference).
+double meanDiagonal(const System& sys);
+
+/// RMS of a system's rows at theta [m/s^2].
+double residualRms(const System& sys, const Eigen::VectorXd& theta);
+
+/// Where each muscle's unknowns sit and which the solve constrains.
+struct SignConstraints {
+  int muscles = 0;
+  int per_muscle = 0;         ///< unknowns per muscle (2 sensors + 3)
+  int own_stiffness = 0;      ///< a muscle's stiffness column within its block; damping follows
+  bool nonnegative_own_spring = true;   ///< stiffness and damping >= 0
+  std::vector<int> held_at_zero;        ///< columns always 0 (stiffness of muscles without one)
+};
+
+/// theta for a relative ridge under `constraints`; false when a solve fails. The signs by an
+/// active set that only grows: a negative stiffness or damping is held at 0 and the rest solved
+/// again, until none is negative (at most 6 solves; what is still negative then is set to 0).
+/// The ridge is relative to `reference_diagonal` when > 0 (to keep a ridge's weight when rows
+/// are added), else to the system's own mean diagonal.
+bool solveRidge(const System& sys, double ridge, const SignConstraints& constraints, Eigen::VectorXd* theta,
+                double reference_diagonal = 0.0);
+
+}  // namespace mme::sensor_muscles
