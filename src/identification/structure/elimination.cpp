@@ -79,7 +79,7 @@ class ActiveSolve {
       for (int j = 0; j < u; ++j) block(i, j) = inv_(r[i], r[j]);
     }
     // The block of a positive-definite inverse is positive definite: a Cholesky (LDLT) solves
-    // it ten times faster than an orthogonal decomposition, which matters for the joint rise of
+    // it much faster than an orthogonal decomposition, which matters for the joint rise of
     // a thousand cheap units; the decomposition stays the fallback when round-off breaks it.
     const Eigen::LDLT<Eigen::MatrixXd> ldlt(block);
     if (ldlt.info() == Eigen::Success && ldlt.isPositive() && (ldlt.vectorD().array() > 0.0).all())
