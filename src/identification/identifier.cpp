@@ -232,342 +232,420 @@ std::vector<Eigen::Vector3d> referencePositions(const Model& model, const Trajec
 
 }  // namespace
 
-IdentifyResult identifyModel(const Model& input_model, const Trajectory& trajectory,
-                             const IdentifyOptions& options,
-                             const std::function<void(const Progress&)>& progress) {
-  const std::string bad = validateOptions(options);
-  if (!bad.empty()) throw InputError(bad);
-  const auto start = std::chrono::steady_clock::now();
-  Model model = input_model;
-  auto cost = std::make_shared<ShortTermCost>(model, trajectory);
-  // Without a single one-step term (heavy occlusion) only the output error can use the data.
-  const bool no_terms = cost->termCount() == 0;
-  if (no_terms && options.cost == CostChoice::kShortTerm)
-    throw InputError("no usable (particle, frame) terms for the one-step cost: too few frames or "
-                     "too much occlusion (--cost auto or output_error uses every observed sample)");
-  if (!(model.frame_rate_hz > 0.0)) model.frame_rate_hz = trajectory.frame_rate_hz;
-  ParameterSpace space(model, trajectory);
-  bool has_threshold_genes = false;
-  for (size_t k = 0; k < space.size(); ++k) has_threshold_genes = has_threshold_genes || !space.gene(k).smooth;
-  std::vector<std::string> notes, seed_notes;
-  std::vector<std::vector<double>> seeds;
-  if (options.equation_error_start)
-    seeds = equationErrorSeeds(model, trajectory, &space, &seed_notes);
-  if (options.values_start) {
-    // A complete guess (every free parameter with a value, e.g. a model identified before) is
-    // one individual of the first population as it is: the search never ends worse than it.
-    const std::vector<ParamRef> refs = freeParameters(model);
-    bool complete = !refs.empty();
-    for (const ParamRef& r : refs) complete = complete && paramOf(model, r).has_value;
-    if (complete)
-      seeds.insert(seeds.begin(), seedGenes(getValues(model, refs), "the model's value", &space,
-                                            &seed_notes));
+namespace {
+
+/// One identification (identifyModel), its steps as methods over the state they share: the
+/// starts, the search on the one-step cost (widening default bounds the answer presses on), the
+/// output error where it is wanted (its starts, the stiff-scene substeps, the final fit), and the
+/// result with its flags and uncertainties.
+class Identification {
+ public:
+  Identification(const Model& model, const Trajectory& trajectory, const IdentifyOptions& options,
+                 const std::function<void(const Progress&)>& progress)
+      : options_(options), progress_(progress), trajectory_(trajectory), model_(model),
+        start_(std::chrono::steady_clock::now()),
+        cost_(std::make_shared<ShortTermCost>(model_, trajectory_)),
+        no_terms_(cost_->termCount() == 0) {
+    // Without a single one-step term (heavy occlusion) only the output error can use the data.
+    if (no_terms_ && options_.cost == CostChoice::kShortTerm)
+      throw InputError("no usable (particle, frame) terms for the one-step cost: too few frames or "
+                       "too much occlusion (--cost auto or output_error uses every observed sample)");
+    if (!(model_.frame_rate_hz > 0.0)) model_.frame_rate_hz = trajectory_.frame_rate_hz;
+    space_ = std::make_unique<ParameterSpace>(model_, trajectory_);
   }
-  auto elapsed = [&start]() {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  };
-  const auto note = [&](const std::string& text, int generation, uint64_t evaluations) {
-    notes.push_back(text);
-    if (!progress) return;
+
+  IdentifyResult run() {
+    prepareSeeds();
+    if (!no_terms_) {
+      search();
+    } else {
+      note("the one-step cost has no term (each needs three frames of a particle and two of its "
+           "neighbours): the output error alone, from the equation-error start or the initial "
+           "distribution's centre");
+    }
+    // The search's answer, or without a search the best start there is.
+    best_genes_.resize(space_->size());
+    for (size_t k = 0; k < space_->size(); ++k) best_genes_[k] = space_->gene(k).init_center;
+    if (!seeds_.empty()) best_genes_ = seeds_.front();
+    if (es_) best_genes_ = es_->best().genes;
+    reference_ = referencePositions(model_, trajectory_);
+    omega_h_ = omegaH(space_->toPhysical(best_genes_));
+    r_.parameters = space_->refs();
+    r_.values = space_->toPhysical(best_genes_);
+    r_.global_cost = es_ ? es_->best().cost : std::numeric_limits<double>::infinity();
+    r_.estimator = Estimator::kShortTerm;
+    r_.noise_estimate_m = estimateMarkerNoise(trajectory_);
+    unidentifiable_.assign(space_->size(), 0);
+    if (wantsOutputError() && stop_ != IdentifyStop::kWallTime) runOutputError();
+    return result();
+  }
+
+ private:
+  double elapsed() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+  /// A note for the result, also passed on as a progress message.
+  void note(const std::string& text) {
+    notes_.push_back(text);
+    if (!progress_) return;
     Progress p;
-    p.generation = generation;
-    p.evaluations = evaluations;
+    p.generation = generations_done_;
+    p.evaluations = evaluations_done_;
     p.wall_time_s = elapsed();
     p.message = text;
-    progress(p);
-  };
-  for (const std::string& text : seed_notes) note(text, 0, 0);
-  IdentifyStop stop = IdentifyStop::kGenerations;
-  int generations_done = 0;
-  uint64_t evaluations_done = 0;
-  int widenings = 0;
-  std::unique_ptr<EvolutionStrategy> es;
+    progress_(p);
+  }
 
-  // The global search on the one-step cost: widening a default bound the refined best presses
-  // on and resuming from that best (a bounded number of times).
-  const auto search = [&]() {
+  /// The first population's seeds: the equation-error starts, and a complete guess (every free
+  /// parameter with a value, e.g. a model identified before) as it is, so that the search never
+  /// ends worse than it.
+  void prepareSeeds() {
+    std::vector<std::string> seed_notes;
+    if (options_.equation_error_start)
+      seeds_ = equationErrorSeeds(model_, trajectory_, space_.get(), &seed_notes);
+    if (options_.values_start) {
+      const std::vector<ParamRef> refs = freeParameters(model_);
+      bool complete = !refs.empty();
+      for (const ParamRef& r : refs) complete = complete && paramOf(model_, r).has_value;
+      if (complete)
+        seeds_.insert(seeds_.begin(), seedGenes(getValues(model_, refs), "the model's value",
+                                                space_.get(), &seed_notes));
+    }
+    for (const std::string& text : seed_notes) note(text);
+  }
+
+  /// The global search on the one-step cost: widening a default bound the refined best presses
+  /// on and resuming from that best (a bounded number of times).
+  void search() {
+    while (true) {
+      const bool at_default_bound = runGenerations();
+      generations_done_ += es_->generation();
+      evaluations_done_ += es_->evaluations();
+      if (stop_ == IdentifyStop::kTargetCost || stop_ == IdentifyStop::kWallTime ||
+          widenings_ >= options_.max_bound_widenings || generations_done_ >= options_.generations)
+        return;
+      if (!at_default_bound && widenableAtBound(*space_, es_->best().genes).empty()) return;
+      const std::vector<double> best = es_->best().genes;
+      widenBoundsAt(best);
+      ++widenings_;
+      seeds_.insert(seeds_.begin(), best);
+    }
+  }
+
+  /// One run of the evolution strategy from the seeds until a stop rule; true when it stopped
+  /// because a refined best pressed on a default bound (the answer lies beyond it).
+  bool runGenerations() {
     // Converged: over the last `patience` generations the best cost fell by less than a
     // relative kPatienceShare, or it sits at the round-off floor.
-    const double floor_m2 = 1e-26 * static_cast<double>(cost->residualCount());
-    while (true) {
-      es = std::make_unique<EvolutionStrategy>(space, options.es);
-      es->setCost(cost);
-      es->setSeeds(seeds);
-      if (options.max_wall_time_s > 0.0)
-        es->setDeadline(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                    std::chrono::duration<double>(options.max_wall_time_s)));
-      std::vector<double> best_after;  // per generation of this search
-      int refinements_seen = 0;
-      bool at_default_bound = false;
-      stop = IdentifyStop::kGenerations;
-      while (generations_done + es->generation() < options.generations) {
-        es->step();
-        const double best = es->best().cost;
-        best_after.push_back(best);
-        if (progress) {
-          Progress p;
-          p.generation = generations_done + es->generation();
-          p.evaluations = evaluations_done + es->evaluations();
-          p.best_cost = best;
-          p.wall_time_s = elapsed();
-          p.best_values = es->bestValues();
-          progress(p);
-        }
-        if (options.target_cost > 0.0 && best <= options.target_cost) {
-          stop = IdentifyStop::kTargetCost;
-          break;
-        }
-        if (options.max_wall_time_s > 0.0 && elapsed() >= options.max_wall_time_s) {
-          stop = IdentifyStop::kWallTime;
-          break;
-        }
-        if (es->refinements() != refinements_seen) {
-          // A refined best pressing on a default bound: the answer lies beyond it.
-          refinements_seen = es->refinements();
-          if (widenings < options.max_bound_widenings &&
-              !widenableAtBound(space, es->best().genes).empty()) {
-            at_default_bound = true;
-            break;
-          }
-        }
-        // Thresholds (conditional bonds) make the cost piecewise: a refinement can settle in a
-        // wrong interval's local optimum that the evolution strategy leaves only after tens of
-        // generations more (a cable object left 50 generations flat at 4.6 % off, then found
-        // the basin at generation 92), so the patience doubles where there is one.
-        const int patience = options.patience_generations * (has_threshold_genes ? 2 : 1);
-        const size_t g = best_after.size();
-        if (patience > 0 && es->refinements() > 0 &&
-            (best <= floor_m2 || (g > static_cast<size_t>(patience) &&
-                                  best_after[g - 1 - patience] - best <= kPatienceShare * best_after[g - 1 - patience]))) {
-          stop = IdentifyStop::kConverged;
-          break;
-        }
+    const double floor_m2 = 1e-26 * static_cast<double>(cost_->residualCount());
+    es_ = std::make_unique<EvolutionStrategy>(*space_, options_.es);
+    es_->setCost(cost_);
+    es_->setSeeds(seeds_);
+    if (options_.max_wall_time_s > 0.0)
+      es_->setDeadline(start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                    std::chrono::duration<double>(options_.max_wall_time_s)));
+    std::vector<double> best_after;  // per generation of this run
+    int refinements_seen = 0;
+    stop_ = IdentifyStop::kGenerations;
+    while (generations_done_ + es_->generation() < options_.generations) {
+      es_->step();
+      const double best = es_->best().cost;
+      best_after.push_back(best);
+      reportGeneration(best);
+      if (options_.target_cost > 0.0 && best <= options_.target_cost) {
+        stop_ = IdentifyStop::kTargetCost;
+        return false;
       }
-      generations_done += es->generation();
-      evaluations_done += es->evaluations();
-      if (stop == IdentifyStop::kTargetCost || stop == IdentifyStop::kWallTime ||
-          widenings >= options.max_bound_widenings || generations_done >= options.generations)
-        return;
-      if (!at_default_bound && widenableAtBound(space, es->best().genes).empty()) return;
-      const std::vector<double> best = es->best().genes;
-      for (const std::pair<size_t, int>& hit : widenableAtBound(space, best)) {
-        const size_t k = hit.first;
-        const int side = hit.second;
-        const Gene& g = space.gene(k);
-        const double step = g.log_scale ? std::log(kWidenFactor) : (kWidenFactor - 1.0) * (g.upper - g.lower);
-        const double lo = side < 0 ? g.lower - step : g.lower, hi = side > 0 ? g.upper + step : g.upper;
-        const double value = space.toPhysical(best)[k];
-        const std::string name = g.ref.name;
-        const bool log_scale = g.log_scale;
-        space.setBounds(k, lo, hi);
-        const Gene& wide = space.gene(k);
-        note("'" + name + "' ended at its default " + (side < 0 ? "lower" : "upper") +
-                 " search bound (" + formatValue(value) + "): bounds widened to [" +
-                 formatValue(log_scale ? std::exp(wide.lower) : wide.lower) + ", " +
-                 formatValue(log_scale ? std::exp(wide.upper) : wide.upper) + "], search resumed",
-             generations_done, evaluations_done);
+      if (options_.max_wall_time_s > 0.0 && elapsed() >= options_.max_wall_time_s) {
+        stop_ = IdentifyStop::kWallTime;
+        return false;
       }
-      ++widenings;
-      seeds.insert(seeds.begin(), best);
+      if (es_->refinements() != refinements_seen) {
+        refinements_seen = es_->refinements();
+        if (widenings_ < options_.max_bound_widenings &&
+            !widenableAtBound(*space_, es_->best().genes).empty())
+          return true;
+      }
+      if (converged(best_after, floor_m2)) {
+        stop_ = IdentifyStop::kConverged;
+        return false;
+      }
     }
-  };
-  if (!no_terms) {
-    search();
-  } else {
-    note("the one-step cost has no term (each needs three frames of a particle and two of its "
-         "neighbours): the output error alone, from the equation-error start or the initial "
-         "distribution's centre",
-         0, 0);
+    return false;
   }
-  // The search's answer, or without a search the best start there is.
-  std::vector<double> best_genes(space.size());
-  for (size_t k = 0; k < space.size(); ++k) best_genes[k] = space.gene(k).init_center;
-  if (!seeds.empty()) best_genes = seeds.front();
-  if (es) best_genes = es->best().genes;
 
-  // Stiff scenes: more substeps when the answer's stiffest mode is fast for the frame rate.
-  const std::vector<Eigen::Vector3d> reference = referencePositions(model, trajectory);
-  const double h = 1.0 / model.frame_rate_hz;
-  const auto omegaH = [&](const std::vector<double>& values) {
-    Model m = model;
-    setValues(m, space.refs(), values);
-    return stiffestModeRadPerS(m, reference) * h;
-  };
-  double omega_h = omegaH(space.toPhysical(best_genes));
+  void reportGeneration(double best_cost) {
+    if (!progress_) return;
+    Progress p;
+    p.generation = generations_done_ + es_->generation();
+    p.evaluations = evaluations_done_ + es_->evaluations();
+    p.best_cost = best_cost;
+    p.wall_time_s = elapsed();
+    p.best_values = es_->bestValues();
+    progress_(p);
+  }
 
-  IdentifyResult r;
-  r.parameters = space.refs();
-  r.values = space.toPhysical(best_genes);
-  r.global_cost = es ? es->best().cost : std::numeric_limits<double>::infinity();
-  r.estimator = Estimator::kShortTerm;
-  r.noise_estimate_m = estimateMarkerNoise(trajectory);
-  std::vector<uint8_t> unidentifiable(space.size(), 0);
-  std::vector<double> std_devs;
-  // Auto: the output error when the markers look noisy and the one-step fit is not exact (a
-  // fit to round-off means noiseless data the one-step model explains: nothing to gain).
-  const double fit_rms_m = std::sqrt(r.global_cost / std::max<double>(1.0, cost->residualCount()));
-  // Also when the one-step cost leaves out most observed samples (each of its terms needs three
-  // frames of a particle and two of its neighbours): occlusion then starves it, an exact fit of
-  // a few terms can be wrong, and the output error uses every sample.
-  size_t observed = 0;
-  for (int t = 0; t < trajectory.numFrames(); ++t)
-    for (int i = 0; i < trajectory.numMarkers(); ++i)
-      observed += !model.particles[i].fixed && !trajectory.isOccluded(t, i);
-  const bool starved =
-      no_terms || (trajectory.numFrames() >= 3 &&
-                   static_cast<double>(cost->termCount()) < kStarvedShare * static_cast<double>(observed));
-  const bool output_error =
-      options.cost == CostChoice::kOutputError ||
-      (options.cost == CostChoice::kAuto &&
-       (starved || (r.noise_estimate_m >= options.auto_noise_threshold_m && fit_rms_m >= kExactFitRms_m)));
-  if (output_error && options.cost == CostChoice::kAuto && starved)
-    note("the one-step cost uses " + std::to_string(cost->termCount()) + " of " +
-             std::to_string(observed) + " observed samples (occlusion): the output error uses all",
-         generations_done, evaluations_done);
-  if (output_error && stop != IdentifyStop::kWallTime) {
-    // From the search's answer and from the smoothed equation-error solutions (the one-step
-    // optimum is biased by noise, badly so at a millimetre); the lowest output-error cost wins.
-    std::vector<std::vector<double>> starts{best_genes};
+  /// Thresholds (conditional bonds) make the cost piecewise: a refinement can settle in a wrong
+  /// interval's local optimum that the evolution strategy leaves only after tens of generations
+  /// more (a cable object left 50 generations flat at 4.6 % off, then found the basin at
+  /// generation 92), so the patience doubles where there is one.
+  bool converged(const std::vector<double>& best_after, double floor_m2) const {
+    bool has_threshold_genes = false;
+    for (size_t k = 0; k < space_->size(); ++k) has_threshold_genes = has_threshold_genes || !space_->gene(k).smooth;
+    const int patience = options_.patience_generations * (has_threshold_genes ? 2 : 1);
+    const size_t g = best_after.size();
+    const double best = best_after.back();
+    return patience > 0 && es_->refinements() > 0 &&
+           (best <= floor_m2 || (g > static_cast<size_t>(patience) &&
+                                 best_after[g - 1 - patience] - best <= kPatienceShare * best_after[g - 1 - patience]));
+  }
+
+  /// Widens every default bound `best` presses on by kWidenFactor, and says so.
+  void widenBoundsAt(const std::vector<double>& best) {
+    for (const std::pair<size_t, int>& hit : widenableAtBound(*space_, best)) {
+      const size_t k = hit.first;
+      const int side = hit.second;
+      const Gene& g = space_->gene(k);
+      const double step = g.log_scale ? std::log(kWidenFactor) : (kWidenFactor - 1.0) * (g.upper - g.lower);
+      const double lo = side < 0 ? g.lower - step : g.lower, hi = side > 0 ? g.upper + step : g.upper;
+      const double value = space_->toPhysical(best)[k];
+      const std::string name = g.ref.name;
+      const bool log_scale = g.log_scale;
+      space_->setBounds(k, lo, hi);
+      const Gene& wide = space_->gene(k);
+      note("'" + name + "' ended at its default " + (side < 0 ? "lower" : "upper") +
+           " search bound (" + formatValue(value) + "): bounds widened to [" +
+           formatValue(log_scale ? std::exp(wide.lower) : wide.lower) + ", " +
+           formatValue(log_scale ? std::exp(wide.upper) : wide.upper) + "], search resumed");
+    }
+  }
+
+  /// The stiffest mode's angular frequency times the frame period, at `values`.
+  double omegaH(const std::vector<double>& values) const {
+    Model m = model_;
+    setValues(m, space_->refs(), values);
+    return stiffestModeRadPerS(m, reference_) / model_.frame_rate_hz;
+  }
+
+  /// Whether the output error gives the answer. Auto: when the markers look noisy and the
+  /// one-step fit is not exact (a fit to round-off means noiseless data the one-step model
+  /// explains: nothing to gain), or when the one-step cost leaves out most observed samples
+  /// (each of its terms needs three frames of a particle and two of its neighbours: occlusion
+  /// then starves it, an exact fit of a few terms can be wrong, and the output error uses every
+  /// sample).
+  bool wantsOutputError() {
+    const double fit_rms_m = std::sqrt(r_.global_cost / std::max<double>(1.0, cost_->residualCount()));
+    size_t observed = 0;
+    for (int t = 0; t < trajectory_.numFrames(); ++t)
+      for (int i = 0; i < trajectory_.numMarkers(); ++i)
+        observed += !model_.particles[i].fixed && !trajectory_.isOccluded(t, i);
+    const bool starved = no_terms_ || (trajectory_.numFrames() >= 3 &&
+                                       static_cast<double>(cost_->termCount()) < kStarvedShare * static_cast<double>(observed));
+    const bool output_error =
+        options_.cost == CostChoice::kOutputError ||
+        (options_.cost == CostChoice::kAuto &&
+         (starved || (r_.noise_estimate_m >= options_.auto_noise_threshold_m && fit_rms_m >= kExactFitRms_m)));
+    if (output_error && options_.cost == CostChoice::kAuto && starved)
+      note("the one-step cost uses " + std::to_string(cost_->termCount()) + " of " +
+           std::to_string(observed) + " observed samples (occlusion): the output error uses all");
+    return output_error;
+  }
+
+  /// The output error's starts: the search's answer and the smoothed equation-error solutions
+  /// (the one-step optimum is biased by noise, badly so at a millimetre).
+  std::vector<std::vector<double>> outputErrorStarts() const {
+    std::vector<std::vector<double>> starts{best_genes_};
     for (int half_width : {3, 8}) {
       EquationErrorOptions o;
       o.smoothing_half_width = half_width;
-      const EquationErrorResult ee = solveEquationError(model, trajectory, o);
+      const EquationErrorResult ee = solveEquationError(model_, trajectory_, o);
       if (!ee.applicable) break;
-      std::vector<double> g = best_genes;
-      for (size_t k = 0; k < space.size(); ++k) {
-        const Gene& gene = space.gene(k);
+      std::vector<double> g = best_genes_;
+      for (size_t k = 0; k < space_->size(); ++k) {
+        const Gene& gene = space_->gene(k);
         const double v = ee.values[k];
         if (!gene.smooth || gene.clamp_length || !std::isfinite(v) || (gene.log_scale && !(v > 0.0)))
           continue;
-        g[k] = space.reflect(k, gene.log_scale ? std::log(v) : v);
+        g[k] = space_->reflect(k, gene.log_scale ? std::log(v) : v);
       }
       starts.push_back(g);
     }
+    return starts;
+  }
+
+  /// An output-error fit of `m` from `from`, within what is left of the time limit.
+  OutputErrorResult fit(const Model& m, const std::vector<double>& from, int max_iterations,
+                        bool estimate_std) const {
+    OutputErrorOptions o = options_.output_error;
+    o.max_iterations = std::min(o.max_iterations, max_iterations);
+    o.threads = std::max(o.threads, options_.es.threads);
+    if (options_.max_wall_time_s > 0.0) {
+      const double left = options_.max_wall_time_s - elapsed();
+      if (left <= 0.0) return OutputErrorResult();
+      o.max_time_s = o.max_time_s > 0.0 ? std::min(o.max_time_s, left) : left;
+    }
+    o.estimate_std = estimate_std;
+    return estimateOutputError(m, trajectory_, *space_, from, o);
+  }
+
+  /// A fit that ran but ended non-finite (Ceres could not evaluate the residuals, e.g. a rollout
+  /// that blew up) is no answer.
+  static bool usable(const OutputErrorResult& oe) { return oe.ran && std::isfinite(oe.observation_cost_m2); }
+
+  /// Each start scouted with a few iterations; the lowest output-error cost wins. *failed: why
+  /// a fit that ran was unusable.
+  OutputErrorResult scoutStarts(std::string* failed) const {
     OutputErrorResult best_oe;
-    // Each start is scouted with a few iterations; the best one is then fitted to convergence.
-    const auto fit = [&](const Model& m, const std::vector<double>& from, int max_iterations,
-                         bool estimate_std) {
-      OutputErrorOptions o = options.output_error;
-      o.max_iterations = std::min(o.max_iterations, max_iterations);
-      o.threads = std::max(o.threads, options.es.threads);
-      if (options.max_wall_time_s > 0.0) {
-        const double left = options.max_wall_time_s - elapsed();
-        if (left <= 0.0) return OutputErrorResult();
-        o.max_time_s = o.max_time_s > 0.0 ? std::min(o.max_time_s, left) : left;
-      }
-      o.estimate_std = estimate_std;
-      return estimateOutputError(m, trajectory, space, from, o);
-    };
-    // A fit that ran but ended non-finite (Ceres could not evaluate the residuals, e.g. a rollout
-    // that blew up) is no answer: the search's one-step answer stays.
-    const auto usable = [](const OutputErrorResult& oe) {
-      return oe.ran && std::isfinite(oe.observation_cost_m2);
-    };
-    std::string failed;
-    for (const std::vector<double>& from : starts) {
-      OutputErrorResult oe = fit(model, from, kScoutIterations, false);
-      if (oe.ran && !usable(oe)) failed = oe.termination;
+    for (const std::vector<double>& from : outputErrorStarts()) {
+      OutputErrorResult oe = fit(model_, from, kScoutIterations, false);
+      if (oe.ran && !usable(oe)) *failed = oe.termination;
       if (!usable(oe)) oe.ran = false;
       if (oe.ran && (!best_oe.ran || oe.observation_cost_m2 < best_oe.observation_cost_m2)) best_oe = oe;
       // A fit as good as the noise allows needs no other start.
       if (best_oe.ran && best_oe.noise_std_m <= 1.2 * best_oe.noise_std_prior_m) break;
     }
-    // Stiff scenes: semi-implicit Euler drifts as (omega h)^2; a finer integrator is kept when
-    // the simulated motion fits the frames clearly better (data made by a coarse integrator,
-    // e.g. a simulation with one step per frame, keep theirs).
-    if (best_oe.ran) omega_h = omegaH(best_oe.values);
-    if (best_oe.ran && options.max_omega_h_per_substep > 0.0 &&
-        omega_h / model.substeps > options.max_omega_h_per_substep) {
-      const int needed = std::min(
-          kMaxSubsteps, static_cast<int>(std::ceil(omega_h / options.max_omega_h_per_substep)));
-      if (needed > model.substeps) {
-        Model finer = model;
-        finer.substeps = needed;
-        const OutputErrorResult oe = fit(finer, best_oe.genes, kScoutIterations, false);
-        const bool better = usable(oe) && oe.observation_cost_m2 < 0.5 * best_oe.observation_cost_m2;
-        note("the stiffest mode has omega*h = " + formatValue(omega_h) + " per frame: " +
-                 std::to_string(needed) + " substeps per frame fit the frames " +
-                 (better ? "better" : "no better") + " than " + std::to_string(model.substeps) +
-                 " (output-error cost " + formatValue(oe.observation_cost_m2) + " against " +
-                 formatValue(best_oe.observation_cost_m2) + " m^2): " +
-                 (better ? "the model now uses " + std::to_string(needed) : "kept " + std::to_string(model.substeps)),
-             generations_done, evaluations_done);
-        if (better) {
-          model = finer;
-          best_oe = oe;
-        }
+    return best_oe;
+  }
+
+  /// Stiff scenes: semi-implicit Euler drifts as (omega h)^2; a finer integrator is kept when
+  /// the simulated motion fits the frames clearly better (data made by a coarse integrator,
+  /// e.g. a simulation with one step per frame, keep theirs).
+  void trySubsteps(OutputErrorResult* best_oe) {
+    if (!(options_.max_omega_h_per_substep > 0.0) ||
+        !(omega_h_ / model_.substeps > options_.max_omega_h_per_substep))
+      return;
+    const int needed = std::min(kMaxSubsteps, static_cast<int>(std::ceil(omega_h_ / options_.max_omega_h_per_substep)));
+    if (needed <= model_.substeps) return;
+    Model finer = model_;
+    finer.substeps = needed;
+    const OutputErrorResult oe = fit(finer, best_oe->genes, kScoutIterations, false);
+    const bool better = usable(oe) && oe.observation_cost_m2 < 0.5 * best_oe->observation_cost_m2;
+    note("the stiffest mode has omega*h = " + formatValue(omega_h_) + " per frame: " +
+         std::to_string(needed) + " substeps per frame fit the frames " + (better ? "better" : "no better") +
+         " than " + std::to_string(model_.substeps) + " (output-error cost " +
+         formatValue(oe.observation_cost_m2) + " against " + formatValue(best_oe->observation_cost_m2) +
+         " m^2): " + (better ? "the model now uses " + std::to_string(needed) : "kept " + std::to_string(model_.substeps)));
+    if (better) {
+      model_ = finer;
+      *best_oe = oe;
+    }
+  }
+
+  /// The output error from the best start, to convergence; its answer replaces the search's
+  /// (a fit that failed leaves the one-step answer, with a warning).
+  void runOutputError() {
+    std::string failed;
+    OutputErrorResult best_oe = scoutStarts(&failed);
+    if (best_oe.ran) omega_h_ = omegaH(best_oe.values);
+    if (best_oe.ran) trySubsteps(&best_oe);
+    if (!best_oe.ran) {
+      if (!failed.empty()) note("warning: the output-error fit failed (" + failed + "): the one-step fit is kept");
+      return;
+    }
+    const OutputErrorResult oe = fit(model_, best_oe.genes, options_.output_error.max_iterations, options_.estimate_std);
+    if (usable(oe) && oe.observation_cost_m2 <= best_oe.observation_cost_m2 * (1.0 + 1e-9)) best_oe = oe;
+    noteOutputError(best_oe);
+    best_genes_ = best_oe.genes;
+    r_.values = best_oe.values;
+    r_.global_cost = best_oe.observation_cost_m2;
+    r_.noise_std_m = best_oe.noise_std_m;
+    r_.estimator = Estimator::kOutputError;
+    std_devs_ = best_oe.std_devs;
+    unidentifiable_ = best_oe.unidentifiable;
+    omega_h_ = omegaH(r_.values);
+  }
+
+  void noteOutputError(const OutputErrorResult& oe) {
+    note("output error: " + std::to_string(oe.segments) + " segments, " + std::to_string(oe.iterations) +
+         " iterations of the final fit (" +
+         (oe.stages > 1 ? "over " + std::to_string(oe.stages) + " stages growing the data, " : std::string()) +
+         (oe.converged ? "converged" : oe.termination) + "), marker noise from its residuals " +
+         formatValue(oe.noise_std_m) + " m (from the data " + formatValue(r_.noise_estimate_m) + " m)");
+    if (oe.noise_std_m > kMisfitFactor * std::max(r_.noise_estimate_m, 1e-9))
+      note("warning: the output-error residual (" + formatValue(oe.noise_std_m) + " m RMS) is " +
+           formatValue(oe.noise_std_m / std::max(r_.noise_estimate_m, 1e-9)) +
+           "x the markers' noise: the model does not explain the motion (missing bonds or "
+           "kinds, a wrong structure, or too few substeps for its stiffness)");
+  }
+
+  /// A threshold is known only up to the flat interval between the observed lengths where its
+  /// condition switches: its std is that interval's (uniform: width / sqrt(12)); an interval
+  /// that runs to a search bound means the data never saw the condition switch on that side.
+  void thresholdUncertainty() {
+    for (size_t k = 0; k < space_->size() && k < std_devs_.size(); ++k) {
+      const Gene& g = space_->gene(k);
+      if (g.smooth) continue;
+      const auto it = std::upper_bound(g.breakpoints.begin(), g.breakpoints.end(), best_genes_[k]);
+      if (g.breakpoints.empty() || it == g.breakpoints.begin() || it == g.breakpoints.end()) {
+        if (r_.flags[k] == ParameterFlag::kNone) r_.flags[k] = ParameterFlag::kUnidentifiable;
+        continue;
       }
-    }
-    if (best_oe.ran) {
-      const OutputErrorResult oe = fit(model, best_oe.genes, options.output_error.max_iterations,
-                                       options.estimate_std);
-      if (usable(oe) && oe.observation_cost_m2 <= best_oe.observation_cost_m2 * (1.0 + 1e-9)) best_oe = oe;
-      note("output error: " + std::to_string(best_oe.segments) + " segments, " +
-               std::to_string(best_oe.iterations) + " iterations of the final fit (" +
-               (best_oe.stages > 1 ? "over " + std::to_string(best_oe.stages) +
-                                         " stages growing the data, "
-                                   : std::string()) +
-               (best_oe.converged ? "converged" : best_oe.termination) + "), marker noise from its residuals " +
-               formatValue(best_oe.noise_std_m) + " m (from the data " + formatValue(r.noise_estimate_m) + " m)",
-           generations_done, evaluations_done);
-      if (best_oe.noise_std_m > kMisfitFactor * std::max(r.noise_estimate_m, 1e-9))
-        note("warning: the output-error residual (" + formatValue(best_oe.noise_std_m) +
-                 " m RMS) is " + formatValue(best_oe.noise_std_m / std::max(r.noise_estimate_m, 1e-9)) +
-                 "x the markers' noise: the model does not explain the motion (missing bonds or "
-                 "kinds, a wrong structure, or too few substeps for its stiffness)",
-             generations_done, evaluations_done);
-      best_genes = best_oe.genes;
-      r.values = best_oe.values;
-      r.global_cost = best_oe.observation_cost_m2;
-      r.noise_std_m = best_oe.noise_std_m;
-      r.estimator = Estimator::kOutputError;
-      std_devs = best_oe.std_devs;
-      unidentifiable = best_oe.unidentifiable;
-      omega_h = omegaH(r.values);
-    } else if (!failed.empty()) {
-      note("warning: the output-error fit failed (" + failed + "): the one-step fit is kept",
-           generations_done, evaluations_done);
+      const double lo = *(it - 1), hi = *it;
+      const double slope = std::abs(space_->physicalSlope(k, best_genes_));
+      std_devs_[k] = slope * (hi - lo) / std::sqrt(12.0);
     }
   }
-  r.generations = generations_done;
-  r.evaluations = evaluations_done;
-  r.frames = trajectory.numFrames();
-  r.stop = stop;
-  r.last_refine_status = es ? es->lastRefineStatus() : RefineStatus::kNotRun;
-  r.bound_widenings = widenings;
-  r.substeps = model.substeps;
-  r.stiffest_omega_h = omega_h;
-  r.notes = notes;
-  r.flags.assign(r.values.size(), ParameterFlag::kNone);
-  for (size_t k = 0; k < space.size(); ++k) {
-    const int side = space.boundSide(k, best_genes[k]);
-    if (side != 0) r.flags[k] = side < 0 ? ParameterFlag::kAtLowerBound : ParameterFlag::kAtUpperBound;
-    else if (unidentifiable[k]) r.flags[k] = ParameterFlag::kUnidentifiable;
-  }
-  if (r.estimator == Estimator::kShortTerm)
-    std_devs = options.estimate_std
-                   ? estimateStdDevs(*cost, space, best_genes)
-                   : std::vector<double>(r.values.size(), std::numeric_limits<double>::quiet_NaN());
-  // A threshold is known only up to the flat interval between the observed lengths where its
-  // condition switches: its std is that interval's (uniform: width / sqrt(12)); an interval that
-  // runs to a search bound means the data never saw the condition switch on that side.
-  for (size_t k = 0; k < space.size() && k < std_devs.size(); ++k) {
-    const Gene& g = space.gene(k);
-    if (g.smooth) continue;
-    const auto it = std::upper_bound(g.breakpoints.begin(), g.breakpoints.end(), best_genes[k]);
-    if (g.breakpoints.empty() || it == g.breakpoints.begin() || it == g.breakpoints.end()) {
-      if (r.flags[k] == ParameterFlag::kNone) r.flags[k] = ParameterFlag::kUnidentifiable;
-      continue;
+
+  IdentifyResult result() {
+    r_.generations = generations_done_;
+    r_.evaluations = evaluations_done_;
+    r_.frames = trajectory_.numFrames();
+    r_.stop = stop_;
+    r_.last_refine_status = es_ ? es_->lastRefineStatus() : RefineStatus::kNotRun;
+    r_.bound_widenings = widenings_;
+    r_.substeps = model_.substeps;
+    r_.stiffest_omega_h = omega_h_;
+    r_.notes = notes_;
+    r_.flags.assign(r_.values.size(), ParameterFlag::kNone);
+    for (size_t k = 0; k < space_->size(); ++k) {
+      const int side = space_->boundSide(k, best_genes_[k]);
+      if (side != 0) r_.flags[k] = side < 0 ? ParameterFlag::kAtLowerBound : ParameterFlag::kAtUpperBound;
+      else if (unidentifiable_[k]) r_.flags[k] = ParameterFlag::kUnidentifiable;
     }
-    const double lo = *(it - 1), hi = *it;
-    const double slope = std::abs(space.physicalSlope(k, best_genes));
-    std_devs[k] = slope * (hi - lo) / std::sqrt(12.0);
+    if (r_.estimator == Estimator::kShortTerm)
+      std_devs_ = options_.estimate_std
+                      ? estimateStdDevs(*cost_, *space_, best_genes_)
+                      : std::vector<double>(r_.values.size(), std::numeric_limits<double>::quiet_NaN());
+    thresholdUncertainty();
+    r_.std_devs = std_devs_;
+    r_.model = model_;
+    setValues(r_.model, r_.parameters, r_.values);
+    r_.wall_time_s = elapsed();
+    return r_;
   }
-  r.std_devs = std_devs;
-  r.model = model;
-  setValues(r.model, r.parameters, r.values);
-  r.wall_time_s = elapsed();
-  return r;
+
+  const IdentifyOptions& options_;
+  const std::function<void(const Progress&)>& progress_;
+  const Trajectory& trajectory_;
+  Model model_;
+  const std::chrono::steady_clock::time_point start_;
+  std::shared_ptr<ShortTermCost> cost_;
+  const bool no_terms_;
+  std::unique_ptr<ParameterSpace> space_;
+  std::vector<std::vector<double>> seeds_;
+  std::vector<std::string> notes_;
+  IdentifyStop stop_ = IdentifyStop::kGenerations;
+  int generations_done_ = 0;
+  uint64_t evaluations_done_ = 0;
+  int widenings_ = 0;
+  std::unique_ptr<EvolutionStrategy> es_;
+  std::vector<double> best_genes_;
+  std::vector<Eigen::Vector3d> reference_;
+  double omega_h_ = 0.0;
+  IdentifyResult r_;
+  std::vector<uint8_t> unidentifiable_;
+  std::vector<double> std_devs_;
+};
+
+}  // namespace
+
+IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
+                             const IdentifyOptions& options,
+                             const std::function<void(const Progress&)>& progress) {
+  const std::string bad = validateOptions(options);
+  if (!bad.empty()) throw InputError(bad);
+  return Identification(model, trajectory, options, progress).run();
 }
 
 }  // namespace mme

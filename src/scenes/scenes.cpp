@@ -464,42 +464,46 @@ int addNamedBond(Model* model, int type, int a, int b, const std::string& name) 
   return static_cast<int>(model->bonds.size()) - 1;
 }
 
-Scene makeWalker() {
-  Scene scene;
-  Model& model = scene.model;
-  model.frame_rate_hz = 50.0;
-  model.substeps = kWalkerSubsteps;
-  setGravity(&model, Eigen::Vector3d(0.0, 0.0, -9.81));
+/// Where the walker's particles are: legs [fl, fr, hl, hr][hip .. hoof], prism sections [rear ..
+/// head][left rail, right rail, ridge], the tail, and each hip's rail one bay inwards (the hip
+/// flexion's third point and the swing muscle's).
+struct WalkerLayout {
+  static constexpr int kSections = 6;
+  int leg[4][5];
+  int section[kSections][3];
+  int tail = -1;
+  int inner_rail[4];
+};
+
+constexpr const char* kWalkerLegNames[4] = {"fl", "fr", "hl", "hr"};
+constexpr double kWalkerLegX[4] = {0.6, 0.6, -0.6, -0.6};
+constexpr double kWalkerLegY[4] = {0.2, -0.2, 0.2, -0.2};
+
+/// The legs' 20 markers, then the body's (its rails and ridge, the tail, the neck and the head).
+WalkerLayout placeWalkerParticles(Model* model) {
+  WalkerLayout w;
   const double e = kWalkerEdgeM, seg = kWalkerSegmentM, splay = kWalkerSplayRad;
   const double leg_angles[4] = {kWalkerLegTiltRad, 0.0, -kWalkerLegTiltRad, 0.0};
   double rail_z = 0.0;
   for (double a : leg_angles) rail_z += seg * std::cos(a) * std::cos(splay);
   const double ridge_z = rail_z + e * std::sqrt(0.75);
   char name[32];
-  // Legs first: 20 markers.
-  const char* leg_names[4] = {"fl", "fr", "hl", "hr"};
-  const double leg_x[4] = {0.6, 0.6, -0.6, -0.6};
-  const double leg_y[4] = {0.2, -0.2, 0.2, -0.2};
-  int leg[4][5];
   for (int l = 0; l < 4; ++l) {
-    const double side = leg_y[l] > 0 ? 1.0 : -1.0;
-    Eigen::Vector3d x(leg_x[l], leg_y[l], rail_z);
+    const double side = kWalkerLegY[l] > 0 ? 1.0 : -1.0;
+    Eigen::Vector3d x(kWalkerLegX[l], kWalkerLegY[l], rail_z);
     for (int k = 0; k < 5; ++k) {
-      std::snprintf(name, sizeof(name), "leg_%s_%d", leg_names[l], k);
+      std::snprintf(name, sizeof(name), "leg_%s_%d", kWalkerLegNames[l], k);
       if (k == 4) x.z() = 0.0;  // on the floor despite rounding
-      leg[l][k] = addParticle(&model, x, {name, kWalkerLegMassKg[k]});
+      w.leg[l][k] = addParticle(model, x, {name, kWalkerLegMassKg[k]});
       if (k == 4) break;
       const double down = seg * std::cos(leg_angles[k]);
       x += Eigen::Vector3d(seg * std::sin(leg_angles[k]), side * down * std::sin(splay), -down * std::cos(splay));
     }
   }
-  // Prism sections: [s][0] left rail, [s][1] right rail, [s][2] ridge.
-  constexpr int kSections = 6;
-  int section[kSections][3];
-  section[0][0] = leg[2][0];
-  section[0][1] = leg[3][0];
-  section[3][0] = leg[0][0];
-  section[3][1] = leg[1][0];
+  w.section[0][0] = w.leg[2][0];
+  w.section[0][1] = w.leg[3][0];
+  w.section[3][0] = w.leg[0][0];
+  w.section[3][1] = w.leg[1][0];
   auto sectionPoint = [&](int s, int corner) {
     const double x = -0.6 + e * s;
     if (corner == 2) return Eigen::Vector3d(x, 0.0, ridge_z);
@@ -508,32 +512,46 @@ Scene makeWalker() {
   int next_body = 0;
   auto addBody = [&](const Eigen::Vector3d& x, double mass_kg) {
     std::snprintf(name, sizeof(name), "body_%02d", next_body++);
-    return addParticle(&model, x, {name, mass_kg});
+    return addParticle(model, x, {name, mass_kg});
   };
-  for (int s = 0; s < 4; ++s) section[s][2] = addBody(sectionPoint(s, 2), kWalkerTrunkMassKg);  // 00-03
+  for (int s = 0; s < 4; ++s) w.section[s][2] = addBody(sectionPoint(s, 2), kWalkerTrunkMassKg);  // 00-03
   for (int corner = 0; corner < 2; ++corner)  // 04-07: rails between the legs
-    for (int s = 1; s <= 2; ++s) section[s][corner] = addBody(sectionPoint(s, corner), kWalkerTrunkMassKg);
+    for (int s = 1; s <= 2; ++s) w.section[s][corner] = addBody(sectionPoint(s, corner), kWalkerTrunkMassKg);
   // Tail (body_08): apex of a regular tetrahedron on the rear face.
   const Eigen::Vector3d rear = (sectionPoint(0, 0) + sectionPoint(0, 1) + sectionPoint(0, 2)) / 3.0;
-  const int tail = addBody(rear - Eigen::Vector3d(e * std::sqrt(2.0 / 3.0), 0.0, 0.0), kWalkerTailMassKg);
-  for (int s = 4; s < kSections; ++s)  // 09-11 neck, 12-14 head
+  w.tail = addBody(rear - Eigen::Vector3d(e * std::sqrt(2.0 / 3.0), 0.0, 0.0), kWalkerTailMassKg);
+  for (int s = 4; s < WalkerLayout::kSections; ++s)  // 09-11 neck, 12-14 head
     for (int corner = 0; corner < 3; ++corner)
-      section[s][corner] = addBody(sectionPoint(s, corner), s == 4 ? kWalkerNeckMassKg : kWalkerHeadMassKg);
+      w.section[s][corner] = addBody(sectionPoint(s, corner), s == 4 ? kWalkerNeckMassKg : kWalkerHeadMassKg);
+  const int inner_rail[4] = {w.section[2][0], w.section[2][1], w.section[1][0], w.section[1][1]};
+  std::copy(inner_rail, inner_rail + 4, w.inner_rail);
+  return w;
+}
+
+enum WalkerSpring { kLeg, kBody, kBodyBrace, kNeck, kNeckBrace, kTail, kCannon, kReachFore, kReachHind, kSpringTypes };
+enum WalkerFlexion { kKnee, kFetlock, kHipFore, kHipHind, kSplay, kFlexionTypes };
+
+/// The walker's bond types: springs (stiffness, damping, rest length free: that of the unloaded
+/// geometry), flexions (stiffness, rest angle free; damping fixed) and the ground.
+struct WalkerTypes {
+  int spring[kSpringTypes];
+  int flexion[kFlexionTypes];
+  int ground = -1;
+};
+
+WalkerTypes addWalkerTypes(Model* model, const WalkerLayout& w) {
   std::vector<Eigen::Vector3d> x0;
-  for (const Particle& p : model.particles) x0.push_back(p.position_m);
+  for (const Particle& p : model->particles) x0.push_back(p.position_m);
   auto dist = [&](int a, int b) { return (x0[a] - x0[b]).norm(); };
   auto angle = [&](int a, int b, int c) {
     return std::acos((x0[a] - x0[b]).normalized().dot((x0[c] - x0[b]).normalized()));
   };
-  // The rail one bay inwards of each hip: the hip flexion's third point and the swing muscle's.
-  const int inner_rail[4] = {section[2][0], section[2][1], section[1][0], section[1][1]};
-  // Spring types, free: stiffness, damping, rest length (that of the unloaded geometry).
+  const double e = kWalkerEdgeM, seg = kWalkerSegmentM;
   struct SpringSpec {
     const char* name;
     double rest_length, stiffness, damping;
   };
   const double k_leg = 3.0e5, k_body = 3.0e5;
-  enum { kLeg, kBody, kBodyBrace, kNeck, kNeckBrace, kTail, kCannon, kReachFore, kReachHind, kSpringTypes };
   const SpringSpec springs[kSpringTypes] = {
       {"leg_spring", seg, k_leg, 0.0003 * k_leg},
       {"body_spring", e, k_body, 0.0003 * k_body},
@@ -542,40 +560,37 @@ Scene makeWalker() {
       {"neck_brace", e * std::sqrt(2.0), 0.25 * k_body, 0.00005 * k_body},
       {"tail_spring", e, 1200.0, 2.0},
       // The servos' sensors: soft springs along the lift and swing muscles.
-      {"cannon", dist(leg[0][2], leg[0][4]), 2000.0, 5.0},
-      {"reach_fore", dist(leg[0][2], inner_rail[0]), 2000.0, 5.0},
-      {"reach_hind", dist(leg[2][2], inner_rail[2]), 2000.0, 5.0}};
-  int spring_type[kSpringTypes];
+      {"cannon", dist(w.leg[0][2], w.leg[0][4]), 2000.0, 5.0},
+      {"reach_fore", dist(w.leg[0][2], w.inner_rail[0]), 2000.0, 5.0},
+      {"reach_hind", dist(w.leg[2][2], w.inner_rail[2]), 2000.0, 5.0}};
+  WalkerTypes types;
   for (int t = 0; t < kSpringTypes; ++t) {
     BondType type;
     type.name = springs[t].name;
     type.param(kStiffness) = freeMagnitude(springs[t].stiffness);
     type.param(kDamping) = freeMagnitude(springs[t].damping);
     type.param(kRestLength) = freeLength(springs[t].rest_length);
-    spring_type[t] = addBondType(&model, type);
+    types.spring[t] = addBondType(model, type);
   }
-  // Flexion types, free: stiffness, rest angle; damping fixed.
   struct FlexionSpec {
     const char* name;
     double rest_angle, stiffness, damping;
   };
-  enum { kKnee, kFetlock, kHipFore, kHipHind, kSplay, kFlexionTypes };
   const FlexionSpec flexions[kFlexionTypes] = {
-      {"knee", angle(leg[0][0], leg[0][1], leg[0][2]), 1.0e5, 100.0},
-      {"fetlock", angle(leg[0][2], leg[0][3], leg[0][4]), 200.0, 10.0},
-      {"hip", angle(leg[0][1], leg[0][0], inner_rail[0]), 7460.0, 100.0},
-      {"hip_hind", angle(leg[2][1], leg[2][0], inner_rail[2]), 7460.0, 100.0},
-      {"splay", angle(leg[1][0], leg[0][0], leg[0][4]), 3.0e4, 100.0}};
-  int flexion_type[kFlexionTypes];
+      {"knee", angle(w.leg[0][0], w.leg[0][1], w.leg[0][2]), 1.0e5, 100.0},
+      {"fetlock", angle(w.leg[0][2], w.leg[0][3], w.leg[0][4]), 200.0, 10.0},
+      {"hip", angle(w.leg[0][1], w.leg[0][0], w.inner_rail[0]), 7460.0, 100.0},
+      {"hip_hind", angle(w.leg[2][1], w.leg[2][0], w.inner_rail[2]), 7460.0, 100.0},
+      {"splay", angle(w.leg[1][0], w.leg[0][0], w.leg[0][4]), 3.0e4, 100.0}};
   for (int t = 0; t < kFlexionTypes; ++t) {
     BondType type;
     type.name = flexions[t].name;
     type.kind = BondKind::kFlexion;
     type.param(kStiffness) = freeMagnitude(flexions[t].stiffness);
     type.param(kRestAngle) = boundedParam(flexions[t].rest_angle, 0.5 * flexions[t].rest_angle,
-                                       std::min(kPi, 2.0 * flexions[t].rest_angle));
+                                          std::min(kPi, 2.0 * flexions[t].rest_angle));
     type.param(kDamping) = valueParam(flexions[t].damping);
-    flexion_type[t] = addBondType(&model, type);
+    types.flexion[t] = addBondType(model, type);
   }
   // Ground contact, free: stiffness, damping, friction; the floor's height (0) and contact
   // depth fixed. The damping and friction grow over the first 0.3 mm of the 4.5-6 mm a stance
@@ -589,85 +604,115 @@ Scene makeWalker() {
   ground.param(kFriction) = freeMagnitude(4000.0);
   ground.param(kHeight) = valueParam(0.0);
   ground.param(kContactDepth) = valueParam(3.0e-4);
-  const int ground_type = addBondType(&model, ground);
-  // Legs: segments, joints, hips, splay (from the other hip of the pair), ground contact.
+  types.ground = addBondType(model, ground);
+  return types;
+}
+
+/// Legs: segments, joints, hips, splay (from the other hip of the pair), ground contact.
+void addWalkerLegBonds(Model* model, const WalkerLayout& w, const WalkerTypes& types) {
   for (int l = 0; l < 4; ++l) {
-    const int other_hip = leg[l ^ 1][0];
-    for (int k = 0; k < 4; ++k) addBond(&model, spring_type[kLeg], leg[l][k], leg[l][k + 1]);
+    const int other_hip = w.leg[l ^ 1][0];
+    for (int k = 0; k < 4; ++k) addBond(model, types.spring[kLeg], w.leg[l][k], w.leg[l][k + 1]);
     for (int k = 1; k <= 3; ++k)
-      addBond(&model, flexion_type[k == 3 ? kFetlock : kKnee], leg[l][k - 1], leg[l][k], leg[l][k + 1]);
-    addBond(&model, flexion_type[leg_x[l] > 0 ? kHipFore : kHipHind], leg[l][1], leg[l][0], inner_rail[l]);
-    for (int k = 1; k <= 4; ++k) addBond(&model, flexion_type[kSplay], other_hip, leg[l][0], leg[l][k]);
-    addBond(&model, ground_type, leg[l][4]);
+      addBond(model, types.flexion[k == 3 ? kFetlock : kKnee], w.leg[l][k - 1], w.leg[l][k], w.leg[l][k + 1]);
+    addBond(model, types.flexion[kWalkerLegX[l] > 0 ? kHipFore : kHipHind], w.leg[l][1], w.leg[l][0],
+            w.inner_rail[l]);
+    for (int k = 1; k <= 4; ++k) addBond(model, types.flexion[kSplay], other_hip, w.leg[l][0], w.leg[l][k]);
+    addBond(model, types.ground, w.leg[l][4]);
   }
-  // The servos' sensor springs: cannons (_2 to the hoof), reaches (_2 to the inner rail).
-  int cannon[4], reach[4];
-  for (int l = 0; l < 4; ++l)
-    cannon[l] = addNamedBond(&model, spring_type[kCannon], leg[l][2], leg[l][4], std::string("cannon_") + leg_names[l]);
-  for (int l = 0; l < 4; ++l)
-    reach[l] = addNamedBond(&model, spring_type[leg_x[l] > 0 ? kReachFore : kReachHind], leg[l][2],
-                            inner_rail[l], std::string("reach_") + leg_names[l]);
-  // Prism: cross-section triangles, then per bay 3 longitudinal edges and 3 face diagonals.
-  for (int s = 0; s < kSections; ++s) {
-    const int edge = s < 4 ? spring_type[kBody] : spring_type[kNeck];
-    addBond(&model, edge, section[s][0], section[s][1]);
-    addBond(&model, edge, section[s][0], section[s][2]);
-    addBond(&model, edge, section[s][1], section[s][2]);
+}
+
+/// Prism: cross-section triangles, then per bay 3 longitudinal edges and 3 face diagonals.
+void addWalkerPrismBonds(Model* model, const WalkerLayout& w, const WalkerTypes& types) {
+  for (int s = 0; s < WalkerLayout::kSections; ++s) {
+    const int edge = s < 4 ? types.spring[kBody] : types.spring[kNeck];
+    addBond(model, edge, w.section[s][0], w.section[s][1]);
+    addBond(model, edge, w.section[s][0], w.section[s][2]);
+    addBond(model, edge, w.section[s][1], w.section[s][2]);
   }
-  for (int s = 0; s + 1 < kSections; ++s) {
-    const int edge = s < 3 ? spring_type[kBody] : spring_type[kNeck];
-    const int brace = s < 3 ? spring_type[kBodyBrace] : spring_type[kNeckBrace];
-    for (int corner = 0; corner < 3; ++corner) addBond(&model, edge, section[s][corner], section[s + 1][corner]);
-    addBond(&model, brace, section[s][0], section[s + 1][2]);
-    addBond(&model, brace, section[s][1], section[s + 1][2]);
-    addBond(&model, brace, section[s][0], section[s + 1][1]);
+  for (int s = 0; s + 1 < WalkerLayout::kSections; ++s) {
+    const int edge = s < 3 ? types.spring[kBody] : types.spring[kNeck];
+    const int brace = s < 3 ? types.spring[kBodyBrace] : types.spring[kNeckBrace];
+    for (int corner = 0; corner < 3; ++corner) addBond(model, edge, w.section[s][corner], w.section[s + 1][corner]);
+    addBond(model, brace, w.section[s][0], w.section[s + 1][2]);
+    addBond(model, brace, w.section[s][1], w.section[s + 1][2]);
+    addBond(model, brace, w.section[s][0], w.section[s + 1][1]);
   }
-  // Tail: three soft springs to the rear section, named (the top one is every muscle's input).
-  const char* tail_names[3] = {"tail_left", "tail_right", "tail_top"};
-  int tail_top = -1;
-  for (int corner = 0; corner < 3; ++corner)
-    tail_top = addNamedBond(&model, spring_type[kTail], tail, section[0][corner], tail_names[corner]);
-  // Muscles. The tail's drive: y = w s_top.
-  const int tail_drive = addBondType(&model, walkerMuscleType("tail_drive", kTailDriveGainN, 1, 0,
-                                                          {0.0, kTailDriveSpeed, 0.0}));
-  addBond(&model, tail_drive, tail, section[0][2]);
-  model.bonds.back().inputs = {tail_top};
-  // Swing and lift: inputs (tail top, sensor); hidden 0 = the servo on the sensor's length,
-  // hidden 1 = the stride (sign +-1 per diagonal); y = servo_out h0 + stride_out h1 + b2.
+}
+
+/// The muscles: the tail's drive (y = w s_top), then per diagonal a swing and a lift muscle
+/// reading (tail top, sensor); hidden 0 = the servo on the sensor's length, hidden 1 = the
+/// stride (sign +-1 per diagonal); y = servo_out h0 + stride_out h1 + b2.
+void addWalkerMuscles(Model* model, const WalkerLayout& w, int tail_top, const int cannon[4],
+                      const int reach[4]) {
+  const int tail_drive = addBondType(model, walkerMuscleType("tail_drive", kTailDriveGainN, 1, 0,
+                                                             {0.0, kTailDriveSpeed, 0.0}));
+  addBond(model, tail_drive, w.tail, w.section[0][2]);
+  model->bonds.back().inputs = {tail_top};
   int swing[2], lift[2];
   for (int d = 0; d < 2; ++d) {
     const double sign = d == 0 ? 1.0 : -1.0;
     const std::string diagonal = d == 0 ? "_a" : "_b";
-    swing[d] = addBondType(&model, walkerMuscleType("swing" + diagonal, kSwingGainN, 2, 2,
-                                                {0.0, kReachServoZ, 0.0, kReachServoS,                   // w1_0_*
-                                                 sign * kSwingStrideZ, 0.0, sign * kSwingStrideS, 0.0,   // w1_1_*
-                                                 0.0, -sign * kSwingStrideZ * kTailMeanM,                // b1
-                                                 kReachOut, kSwingOut, 0.0}));                           // w2, b2
-    lift[d] = addBondType(&model, walkerMuscleType("lift" + diagonal, kLiftGainN, 2, 2,
-                                               {0.0, kCannonServoZ, 0.0, kCannonServoS,                  // w1_0_*
-                                                sign * kLiftStrideZ, 0.0, sign * kLiftStrideS, 0.0,      // w1_1_*
-                                                0.0, -sign * kLiftStrideZ * kTailMeanM,                  // b1
-                                                kCannonOut, kLiftOut, kLiftBias}));                      // w2, b2
+    swing[d] = addBondType(model, walkerMuscleType("swing" + diagonal, kSwingGainN, 2, 2,
+                                                   {0.0, kReachServoZ, 0.0, kReachServoS,                   // w1_0_*
+                                                    sign * kSwingStrideZ, 0.0, sign * kSwingStrideS, 0.0,   // w1_1_*
+                                                    0.0, -sign * kSwingStrideZ * kTailMeanM,                // b1
+                                                    kReachOut, kSwingOut, 0.0}));                           // w2, b2
+    lift[d] = addBondType(model, walkerMuscleType("lift" + diagonal, kLiftGainN, 2, 2,
+                                                  {0.0, kCannonServoZ, 0.0, kCannonServoS,                  // w1_0_*
+                                                   sign * kLiftStrideZ, 0.0, sign * kLiftStrideS, 0.0,      // w1_1_*
+                                                   0.0, -sign * kLiftStrideZ * kTailMeanM,                  // b1
+                                                   kCannonOut, kLiftOut, kLiftBias}));                      // w2, b2
   }
   // A swing muscle's tension pulls the knee backwards on a fore leg, forwards on a hind one: the
   // left legs (fl, hl) take swing_a, the right ones swing_b, so that fl and hr push back while
   // fr and hl swing forward. The lifts go by diagonal.
   const int lift_diagonal[4] = {0, 1, 1, 0};
   for (int l = 0; l < 4; ++l) {
-    addBond(&model, swing[leg_y[l] > 0 ? 0 : 1], leg[l][2], inner_rail[l]);
-    model.bonds.back().inputs = {tail_top, reach[l]};
-    addBond(&model, lift[lift_diagonal[l]], leg[l][2], leg[l][4]);
-    model.bonds.back().inputs = {tail_top, cannon[l]};
+    addBond(model, swing[kWalkerLegY[l] > 0 ? 0 : 1], w.leg[l][2], w.inner_rail[l]);
+    model->bonds.back().inputs = {tail_top, reach[l]};
+    addBond(model, lift[lift_diagonal[l]], w.leg[l][2], w.leg[l][4]);
+    model->bonds.back().inputs = {tail_top, cannon[l]};
   }
-  // Warm-up from the standing pose with the tail pushed up; the scene starts where it ends.
-  model.particles[tail].velocity_mps = Eigen::Vector3d(0.0, 0.0, kWalkerTailKickMps);
-  Simulator simulator(model);
+}
+
+/// Warm-up from the standing pose with the tail pushed up; the scene starts where it ends.
+void warmUpWalker(Model* model, int tail) {
+  model->particles[tail].velocity_mps = Eigen::Vector3d(0.0, 0.0, kWalkerTailKickMps);
+  Simulator simulator(*model);
   State state = simulator.initialState();
-  for (int f = 0; f < kWalkerWarmupFrames; ++f) simulator.stepFrame(&state, 1.0 / model.frame_rate_hz);
-  for (size_t i = 0; i < model.particles.size(); ++i) {
-    model.particles[i].position_m = state.x_m[i];
-    model.particles[i].velocity_mps = state.v_mps[i];
+  for (int f = 0; f < kWalkerWarmupFrames; ++f) simulator.stepFrame(&state, 1.0 / model->frame_rate_hz);
+  for (size_t i = 0; i < model->particles.size(); ++i) {
+    model->particles[i].position_m = state.x_m[i];
+    model->particles[i].velocity_mps = state.v_mps[i];
   }
+}
+
+Scene makeWalker() {
+  Scene scene;
+  Model& model = scene.model;
+  model.frame_rate_hz = 50.0;
+  model.substeps = kWalkerSubsteps;
+  setGravity(&model, Eigen::Vector3d(0.0, 0.0, -9.81));
+  const WalkerLayout w = placeWalkerParticles(&model);
+  const WalkerTypes types = addWalkerTypes(&model, w);
+  addWalkerLegBonds(&model, w, types);
+  // The servos' sensor springs: cannons (_2 to the hoof), reaches (_2 to the inner rail).
+  int cannon[4], reach[4];
+  for (int l = 0; l < 4; ++l)
+    cannon[l] = addNamedBond(&model, types.spring[kCannon], w.leg[l][2], w.leg[l][4],
+                             std::string("cannon_") + kWalkerLegNames[l]);
+  for (int l = 0; l < 4; ++l)
+    reach[l] = addNamedBond(&model, types.spring[kWalkerLegX[l] > 0 ? kReachFore : kReachHind], w.leg[l][2],
+                            w.inner_rail[l], std::string("reach_") + kWalkerLegNames[l]);
+  addWalkerPrismBonds(&model, w, types);
+  // Tail: three soft springs to the rear section, named (the top one is every muscle's input).
+  const char* tail_names[3] = {"tail_left", "tail_right", "tail_top"};
+  int tail_top = -1;
+  for (int corner = 0; corner < 3; ++corner)
+    tail_top = addNamedBond(&model, types.spring[kTail], w.tail, w.section[0][corner], tail_names[corner]);
+  addWalkerMuscles(&model, w, tail_top, cannon, reach);
+  warmUpWalker(&model, w.tail);
   scene.default_frames = 250;
   return scene;
 }

@@ -99,78 +99,69 @@ struct Kinematics {
   }
 };
 
-}  // namespace
-
-EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajectory& trajectory,
-                                             const EquationErrorOptions& options) {
-  EquationErrorSystem out;
-  const std::vector<ParamRef> refs = freeParameters(model);
-  const int n = static_cast<int>(model.particles.size());
-  const double rate_hz = model.frame_rate_hz > 0.0 ? model.frame_rate_hz : trajectory.frame_rate_hz;
-  if (!(rate_hz > 0.0) || trajectory.numMarkers() != n) {
-    out.reason = "no frame rate, or the trajectory's markers are not the model's particles";
-    return out;
-  }
-  // Columns of the unknowns, and the checks that they enter linearly.
-  std::vector<TypeColumns> types(model.bond_types.size());
+/// The unknowns' columns: per bond type, and gravity's.
+struct ColumnLayout {
+  std::vector<TypeColumns> types;
   std::vector<Column> columns;
-  int gravity_column[3] = {-1, -1, -1};
-  const auto freeIndex = [&](int type, int param) {
-    for (size_t k = 0; k < refs.size(); ++k)
-      if (refs[k].bond_type == type && refs[k].param == param) return static_cast<int>(k);
-    return -1;
-  };
+  int gravity[3] = {-1, -1, -1};
+
+  int add(int param, Role role, int partner = -1, double offset = 0.0) {
+    columns.push_back({param, role, partner, offset});
+    return static_cast<int>(columns.size()) - 1;
+  }
+};
+
+/// The column of free parameter `k` of a spring or a flexion (a rest parameter is placed later,
+/// by placeRestColumns, once the stiffness' column is known). "" or why it is not linear.
+std::string placeSpringOrFlexionParameter(const BondType& type, const ParamRef& r, int k,
+                                          const EquationErrorOptions& options, TypeColumns* tc,
+                                          ColumnLayout* layout) {
+  const bool spring = type.kind == BondKind::kSpring;
+  const int rest_param = spring ? kRestLength : kRestAngle;
+  if (r.param == kStiffness) {
+    tc->k = layout->add(k, Role::kDirect);
+  } else if (r.param == rest_param) {
+    const bool cubic = spring && (type.value(kStiffnessNl) != 0.0 || type.param(kStiffnessNl).free);
+    const bool linearizable = cubic && options.linearize_rest_length && type.param(kStiffness).free &&
+                              type.param(kStiffnessNl).free && type.param(kRestLength).has_value;
+    if (cubic && !linearizable)
+      return "'" + r.name + "' enters non-linearly (the type has a cubic stiffness_nl)";
+  } else if (r.param == kDamping) {
+    tc->damping = layout->add(k, Role::kDirect);
+  } else if (r.param == kStiffnessNl && spring &&
+             (!type.param(kRestLength).free || options.linearize_rest_length)) {
+    tc->stiffness_nl = layout->add(k, Role::kDirect);  // k_nl (l - L)^3, L known (or L0)
+  } else if (r.param == kDampingNl && spring) {
+    tc->damping_nl = layout->add(k, Role::kDirect);    // c_nl s |s|
+  } else {
+    return "'" + r.name + "' does not enter the forces linearly";
+  }
+  return "";
+}
+
+/// A column for every free parameter but the rest parameters. "" or why the model does not fit
+/// the form.
+std::string placeParameterColumns(const Model& model, const std::vector<ParamRef>& refs,
+                                  const EquationErrorOptions& options, ColumnLayout* layout) {
   for (size_t k = 0; k < refs.size(); ++k) {
     const ParamRef& r = refs[k];
+    const int index = static_cast<int>(k);
     if (r.bond_type < 0) {
-      gravity_column[r.param] = static_cast<int>(columns.size());
-      columns.push_back({static_cast<int>(k), Role::kDirect});
+      layout->gravity[r.param] = layout->add(index, Role::kDirect);
       continue;
     }
     const BondType& type = model.bond_types[r.bond_type];
-    TypeColumns& tc = types[r.bond_type];
-    bool linear = false;
+    TypeColumns& tc = layout->types[r.bond_type];
+    std::string why = "'" + r.name + "' does not enter the forces linearly";
     switch (type.kind) {
       case BondKind::kSpring:
-      case BondKind::kFlexion: {
-        const bool spring = type.kind == BondKind::kSpring;
-        const int rest_param = spring ? kRestLength : kRestAngle;
-        if (r.param == kStiffness) {
-          tc.k = static_cast<int>(columns.size());
-          columns.push_back({static_cast<int>(k), Role::kDirect});
-          linear = true;
-        } else if (r.param == rest_param) {
-          const bool cubic =
-              spring && (type.value(kStiffnessNl) != 0.0 || type.param(kStiffnessNl).free);
-          const bool linearizable = cubic && options.linearize_rest_length &&
-                                    type.param(kStiffness).free && type.param(kStiffnessNl).free &&
-                                    type.param(kRestLength).has_value;
-          if (cubic && !linearizable) {
-            out.reason = "'" + r.name + "' enters non-linearly (the type has a cubic stiffness_nl)";
-            return out;
-          }
-          linear = true;  // its column is decided below, once the stiffness' column is known
-        } else if (r.param == kDamping) {
-          tc.damping = static_cast<int>(columns.size());
-          columns.push_back({static_cast<int>(k), Role::kDirect});
-          linear = true;
-        } else if (r.param == kStiffnessNl && spring &&
-                   (!type.param(kRestLength).free || options.linearize_rest_length)) {
-          tc.stiffness_nl = static_cast<int>(columns.size());  // k_nl (l - L)^3, L known (or L0)
-          columns.push_back({static_cast<int>(k), Role::kDirect});
-          linear = true;
-        } else if (r.param == kDampingNl && spring) {
-          tc.damping_nl = static_cast<int>(columns.size());    // c_nl s |s|
-          columns.push_back({static_cast<int>(k), Role::kDirect});
-          linear = true;
-        }
+      case BondKind::kFlexion:
+        why = placeSpringOrFlexionParameter(type, r, index, options, &tc, layout);
         break;
-      }
       case BondKind::kViscosity:
         if (r.param == kViscosity) {
-          tc.viscosity = static_cast<int>(columns.size());
-          columns.push_back({static_cast<int>(k), Role::kDirect});
-          linear = true;
+          tc.viscosity = layout->add(index, Role::kDirect);
+          why.clear();
         }
         break;
       case BondKind::kMuscle:
@@ -180,21 +171,19 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
       case BondKind::kFloor:  // conditional on contact: left to the search too
         break;
     }
-    if (!linear) {
-      out.reason = "'" + r.name + "' does not enter the forces linearly";
-      return out;
-    }
+    if (!why.empty()) return why;
   }
-  // A muscle's activation reads its input bonds' elongations: with a free rest length there
-  // the known forces below (free values set to 0) would be wrong.
-  for (const Bond& b : model.bonds)
-    for (int in : b.inputs) {
-      const BondType& in_type = model.bond_types[model.bonds[in].type];
-      if (in_type.param(kRestLength).free) {
-        out.reason = "'" + in_type.name + "/rest_length' is free and read by a muscle's network";
-        return out;
-      }
-    }
+  return "";
+}
+
+/// The rest parameters' columns: L - L0 beside a free cubic term (linearised), k L beside a free
+/// stiffness, L alone when the stiffness is known.
+void placeRestColumns(const Model& model, const std::vector<ParamRef>& refs, ColumnLayout* layout) {
+  const auto freeIndex = [&](int type, int param) {
+    for (size_t k = 0; k < refs.size(); ++k)
+      if (refs[k].bond_type == type && refs[k].param == param) return static_cast<int>(k);
+    return -1;
+  };
   for (size_t t = 0; t < model.bond_types.size(); ++t) {
     const BondType& type = model.bond_types[t];
     int rest_param = -1;
@@ -207,41 +196,36 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
     }
     const int rest = freeIndex(static_cast<int>(t), rest_param);
     if (rest < 0) continue;
-    TypeColumns& tc = types[t];
-    if (tc.stiffness_nl >= 0) {  // linearised (checked above)
-      tc.rest_step = static_cast<int>(columns.size());
-      columns.push_back({rest, Role::kLinearized, -1, type.param(kRestLength).value});
-    } else if (tc.k >= 0) {
-      tc.product = static_cast<int>(columns.size());
-      columns.push_back({rest, Role::kProduct, tc.k});
-    } else {
-      tc.rest = static_cast<int>(columns.size());
-      columns.push_back({rest, Role::kDirect});
-    }
+    TypeColumns& tc = layout->types[t];
+    if (tc.stiffness_nl >= 0)  // linearised (checked by placeSpringOrFlexionParameter)
+      tc.rest_step = layout->add(rest, Role::kLinearized, -1, type.param(kRestLength).value);
+    else if (tc.k >= 0)
+      tc.product = layout->add(rest, Role::kProduct, tc.k);
+    else
+      tc.rest = layout->add(rest, Role::kDirect);
   }
+}
+
+/// What else keeps the model out of the form: a free rest length read by a muscle's network
+/// (the known forces, free values set to 0, would be wrong), free interaction parameters.
+std::string checkKnownForces(const Model& model) {
+  for (const Bond& b : model.bonds)
+    for (int in : b.inputs) {
+      const BondType& in_type = model.bond_types[model.bonds[in].type];
+      if (in_type.param(kRestLength).free)
+        return "'" + in_type.name + "/rest_length' is free and read by a muscle's network";
+    }
   for (const Interaction& in : model.interactions)
     for (ParamId id : paramsOfKind(model.bond_types[in.type].kind))
-      if (model.bond_types[in.type].param(id).free) {
-        out.reason = "free parameters of interactions (bonds found on the fly)";
-        return out;
-      }
+      if (model.bond_types[in.type].param(id).free)
+        return "free parameters of interactions (bonds found on the fly)";
+  return "";
+}
 
-  // Known forces: the model with every free value set to 0 (what is left does not depend on
-  // the unknowns; each unknown's own contribution is its column below).
-  Model known = model;
-  for (const ParamRef& r : refs) setParam(known, r, 0.0);
-  Simulator simulator(known);
-
-  const int frames = trajectory.numFrames();
-  const double h = 1.0 / rate_hz;
-  const Kinematics kin(options.smoothing_half_width, h);
-  const size_t nc = columns.size();
-  out.ata = Eigen::MatrixXd::Zero(nc, nc);
-  out.atb = Eigen::VectorXd::Zero(nc);
-  Eigen::MatrixXd& ata = out.ata;
-  Eigen::VectorXd& atb = out.atb;
-  double& btb = out.btb;
-  // Which particles each particle's row needs (itself and its bond partners).
+/// Which particles each particle's row needs (itself, its bond partners, and for a muscle's
+/// ends its input bonds' ends).
+std::vector<std::vector<int>> rowNeeds(const Model& model) {
+  const int n = static_cast<int>(model.particles.size());
   std::vector<std::vector<int>> needs(n);
   for (int i = 0; i < n; ++i) needs[i].push_back(i);
   for (const Bond& b : model.bonds) {
@@ -249,111 +233,171 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
     for (int p = 0; p < arity; ++p)
       for (int q = 0; q < arity; ++q)
         if (p != q) needs[b.particles[p]].push_back(b.particles[q]);
-    for (int in : b.inputs)  // a muscle's ends also need its input bonds' ends
+    for (int in : b.inputs)
       for (int p = 0; p < arity; ++p)
         for (int q = 0; q < 2; ++q) needs[b.particles[p]].push_back(model.bonds[in].particles[q]);
   }
+  return needs;
+}
+
+/// One frame's rows: per particle, the column entries (3 components each) of its unknowns.
+class FrameEntries {
+ public:
+  explicit FrameEntries(int particles) : entries_(particles) {}
+  void clear() {
+    for (auto& e : entries_) e.clear();
+  }
+  void add(int particle, int column, const Eigen::Vector3d& f) {
+    if (column < 0) return;
+    auto it = entries_[particle].find(column);
+    if (it == entries_[particle].end()) entries_[particle].emplace(column, f);
+    else it->second += f;
+  }
+  const std::map<int, Eigen::Vector3d>& of(int particle) const { return entries_[particle]; }
+
+ private:
+  std::vector<std::map<int, Eigen::Vector3d>> entries_;
+};
+
+/// A spring's columns at the frame's state: tension f along u, F_a += f u, F_b -= f u.
+void addSpringEntries(const Bond& b, const BondType& type, const TypeColumns& tc, const State& state,
+                      FrameEntries* entries) {
+  const int a = b.particles[0], c = b.particles[1];
+  const Eigen::Vector3d d = state.x_m[c] - state.x_m[a];
+  const double l = d.norm();
+  if (!(l > 0.0)) return;
+  const double lo = type.value(kMinDistance);
+  const double hi = type.param(kMaxDistance).present ? type.value(kMaxDistance) : 1e300;
+  if (!(l >= lo && l <= hi)) return;
+  const Eigen::Vector3d u = d / l;
+  const double s = (state.v_mps[c] - state.v_mps[a]).dot(u);
+  const double k = type.value(kStiffness), rest = type.value(kRestLength);
+  const auto pair = [&](int column, double f) {
+    entries->add(a, column, f * u);
+    entries->add(c, column, -f * u);
+  };
+  if (tc.rest_step >= 0) {        // f = k (l - L0) + k_nl (l - L0)^3 - (k0 + 3 k_nl0 (l - L0)^2) (L - L0)
+    const double e = l - rest;
+    pair(tc.rest_step, -(k + 3.0 * type.value(kStiffnessNl) * e * e));
+    pair(tc.k, e);
+  } else if (tc.product >= 0) {   // f = k l - (k L)
+    pair(tc.k, l);
+    pair(tc.product, -1.0);
+  } else if (tc.k >= 0) {         // f = k (l - L), L known
+    pair(tc.k, l - rest);
+  } else if (tc.rest >= 0) {      // f = k l - k L, k known
+    pair(tc.rest, -k);
+  }
+  pair(tc.damping, s);
+  if (tc.stiffness_nl >= 0) {
+    const double e = l - rest;
+    pair(tc.stiffness_nl, e * e * e);
+  }
+  pair(tc.damping_nl, s * std::fabs(s));
+}
+
+/// A flexion's columns: torque T about the angle, F_p = T grad_p(theta).
+void addFlexionEntries(const Bond& b, const BondType& type, const TypeColumns& tc, const State& state,
+                       FrameEntries* entries) {
+  const int a = b.particles[0], v = b.particles[1], c = b.particles[2];
+  const double theta = flexionAngle(state.x_m[a], state.x_m[v], state.x_m[c]);
+  // grad(theta) at each particle: the force of a law whose torque is exactly 1.
+  FlexionLaw unit;
+  unit.stiffness = 1.0;
+  unit.rest_angle = theta + 1.0;
+  Eigen::Vector3d ga = Eigen::Vector3d::Zero(), gv = ga, gc = ga;
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  addFlexionForce(unit, state.x_m[a], state.x_m[v], state.x_m[c], zero, zero, zero, &ga, &gv, &gc);
+  const double theta_dot = ga.dot(state.v_mps[a]) + gv.dot(state.v_mps[v]) + gc.dot(state.v_mps[c]);
+  const double k = type.value(kStiffness), rest = type.value(kRestAngle);
+  const auto torque = [&](int column, double tq) {
+    entries->add(a, column, tq * ga);
+    entries->add(v, column, tq * gv);
+    entries->add(c, column, tq * gc);
+  };
+  if (tc.product >= 0) {          // T = -k theta + (k theta0)
+    torque(tc.k, -theta);
+    torque(tc.product, 1.0);
+  } else if (tc.k >= 0) {
+    torque(tc.k, -(theta - rest));
+  } else if (tc.rest >= 0) {
+    torque(tc.rest, k);
+  }
+  torque(tc.damping, -theta_dot);
+}
+
+void addBondEntries(const Model& model, const ColumnLayout& layout, const State& state,
+                    FrameEntries* entries) {
+  for (const Bond& b : model.bonds) {
+    const BondType& type = model.bond_types[b.type];
+    const TypeColumns& tc = layout.types[b.type];
+    switch (type.kind) {
+      case BondKind::kSpring: addSpringEntries(b, type, tc, state, entries); break;
+      case BondKind::kFlexion: addFlexionEntries(b, type, tc, state, entries); break;
+      case BondKind::kViscosity:  // F = -c v
+        entries->add(b.particles[0], tc.viscosity, -state.v_mps[b.particles[0]]);
+        break;
+      case BondKind::kMuscle:  // no unknowns: its force is in the known forces
+      case BondKind::kFloor:
+        break;
+    }
+  }
+}
+
+/// Adds particle i's three rows, weighted by h^2 / m (residuals in metres: the one-step error
+/// with raw differences), to the normal equations.
+void accumulateRows(const std::map<int, Eigen::Vector3d>& entries, double w, const Eigen::Vector3d& rhs,
+                    EquationErrorSystem* out) {
+  std::vector<std::pair<int, Eigen::Vector3d>> row(entries.begin(), entries.end());
+  for (auto& e : row) e.second *= w;
+  for (size_t p = 0; p < row.size(); ++p) {
+    out->atb[row[p].first] += row[p].second.dot(rhs);
+    for (size_t q = 0; q <= p; ++q) {
+      const double v = row[p].second.dot(row[q].second);
+      out->ata(row[p].first, row[q].first) += v;
+      if (q != p) out->ata(row[q].first, row[p].first) += v;
+    }
+  }
+  out->btb += rhs.squaredNorm();
+  out->rows += 3;
+}
+
+/// The frame's state from the data: where a sample is missing, the model's position and rest
+/// (that particle's rows are skipped). seen[i]: particle i's kinematics are known.
+void frameState(const Model& model, const Trajectory& trajectory, const Kinematics& kin, int t,
+                State* state, std::vector<Eigen::Vector3d>* acc, std::vector<uint8_t>* seen) {
+  for (size_t i = 0; i < model.particles.size(); ++i) {
+    (*seen)[i] = kin.at(trajectory, t, static_cast<int>(i), &state->x_m[i], &state->v_mps[i], &(*acc)[i]);
+    if (!(*seen)[i]) {
+      state->x_m[i] = model.particles[i].position_m;
+      state->v_mps[i].setZero();
+    }
+    if (model.particles[i].fixed) state->v_mps[i] = model.particles[i].velocity_mps;
+  }
+}
+
+/// Every frame's rows into out's normal equations.
+void accumulateFrames(const Model& model, const Trajectory& trajectory, const ColumnLayout& layout,
+                      const Kinematics& kin, double h, EquationErrorSystem* out) {
+  const int n = static_cast<int>(model.particles.size());
+  // Known forces: the model with every free value set to 0 (what is left does not depend on
+  // the unknowns; each unknown's own contribution is its column).
+  Model known = model;
+  for (const ParamRef& r : freeParameters(model)) setParam(known, r, 0.0);
+  Simulator simulator(known);
+  const std::vector<std::vector<int>> needs = rowNeeds(model);
   State state;
   state.x_m.resize(n);
   state.v_mps.resize(n);
   std::vector<Eigen::Vector3d> acc(n), known_force;
   std::vector<uint8_t> seen(n);
-  // Per particle of one frame: the column entries of its row (3 components each).
-  std::vector<std::map<int, Eigen::Vector3d>> entries(n);
+  FrameEntries entries(n);
+  const int frames = trajectory.numFrames();
   for (int t = kin.first(frames); t <= kin.last(frames); ++t) {
-    for (int i = 0; i < n; ++i) {
-      seen[i] = kin.at(trajectory, t, i, &state.x_m[i], &state.v_mps[i], &acc[i]);
-      if (!seen[i]) {
-        state.x_m[i] = model.particles[i].position_m;
-        state.v_mps[i].setZero();
-      }
-      if (model.particles[i].fixed) state.v_mps[i] = model.particles[i].velocity_mps;
-      entries[i].clear();
-    }
+    frameState(model, trajectory, kin, t, &state, &acc, &seen);
+    entries.clear();
     simulator.computeForces(state, &known_force);
-    const auto add = [&](int particle, int column, const Eigen::Vector3d& f) {
-      if (column < 0) return;
-      auto it = entries[particle].find(column);
-      if (it == entries[particle].end()) entries[particle].emplace(column, f);
-      else it->second += f;
-    };
-    for (const Bond& b : model.bonds) {
-      const BondType& type = model.bond_types[b.type];
-      const TypeColumns& tc = types[b.type];
-      switch (type.kind) {
-      case BondKind::kSpring: {
-        const int a = b.particles[0], c = b.particles[1];
-        const Eigen::Vector3d d = state.x_m[c] - state.x_m[a];
-        const double l = d.norm();
-        if (!(l > 0.0)) continue;
-        const double lo = type.value(kMinDistance);
-        const double hi = type.param(kMaxDistance).present ? type.value(kMaxDistance) : 1e300;
-        if (!(l >= lo && l <= hi)) continue;
-        const Eigen::Vector3d u = d / l;
-        const double s = (state.v_mps[c] - state.v_mps[a]).dot(u);
-        const double k = type.value(kStiffness), rest = type.value(kRestLength);
-        // Tension f along u: F_a += f u, F_b -= f u.
-        const auto pair = [&](int column, double f) {
-          add(a, column, f * u);
-          add(c, column, -f * u);
-        };
-        if (tc.rest_step >= 0) {        // f = k (l - L0) + k_nl (l - L0)^3 - (k0 + 3 k_nl0 (l - L0)^2) (L - L0)
-          const double e = l - rest;
-          pair(tc.rest_step, -(k + 3.0 * type.value(kStiffnessNl) * e * e));
-          pair(tc.k, e);
-        } else if (tc.product >= 0) {   // f = k l - (k L)
-          pair(tc.k, l);
-          pair(tc.product, -1.0);
-        } else if (tc.k >= 0) {         // f = k (l - L), L known
-          pair(tc.k, l - rest);
-        } else if (tc.rest >= 0) {      // f = k l - k L, k known
-          pair(tc.rest, -k);
-        }
-        pair(tc.damping, s);
-        if (tc.stiffness_nl >= 0) {
-          const double e = l - rest;
-          pair(tc.stiffness_nl, e * e * e);
-        }
-        pair(tc.damping_nl, s * std::fabs(s));
-        break;
-      }
-      case BondKind::kFlexion: {
-        const int a = b.particles[0], v = b.particles[1], c = b.particles[2];
-        const double theta = flexionAngle(state.x_m[a], state.x_m[v], state.x_m[c]);
-        // grad(theta) at each particle: the force of a law whose torque is exactly 1.
-        FlexionLaw unit;
-        unit.stiffness = 1.0;
-        unit.rest_angle = theta + 1.0;
-        Eigen::Vector3d ga = Eigen::Vector3d::Zero(), gv = ga, gc = ga;
-        const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
-        addFlexionForce(unit, state.x_m[a], state.x_m[v], state.x_m[c], zero, zero, zero, &ga, &gv, &gc);
-        const double theta_dot = ga.dot(state.v_mps[a]) + gv.dot(state.v_mps[v]) + gc.dot(state.v_mps[c]);
-        const double k = type.value(kStiffness), rest = type.value(kRestAngle);
-        // Torque T: F_p = T grad_p(theta).
-        const auto torque = [&](int column, double tq) {
-          add(a, column, tq * ga);
-          add(v, column, tq * gv);
-          add(c, column, tq * gc);
-        };
-        if (tc.product >= 0) {          // T = -k theta + (k theta0)
-          torque(tc.k, -theta);
-          torque(tc.product, 1.0);
-        } else if (tc.k >= 0) {
-          torque(tc.k, -(theta - rest));
-        } else if (tc.rest >= 0) {
-          torque(tc.rest, k);
-        }
-        torque(tc.damping, -theta_dot);
-        break;
-      }
-      case BondKind::kViscosity:  // F = -c v
-        add(b.particles[0], tc.viscosity, -state.v_mps[b.particles[0]]);
-        break;
-      case BondKind::kMuscle:  // no unknowns: its force is in known_force
-      case BondKind::kFloor:
-        break;
-      }
-    }
+    addBondEntries(model, layout, state, &entries);
     for (int i = 0; i < n; ++i) {
       if (model.particles[i].fixed) continue;
       bool complete = true;
@@ -363,30 +407,42 @@ EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajector
       for (int c = 0; c < 3; ++c) {
         Eigen::Vector3d unit = Eigen::Vector3d::Zero();
         unit[c] = m;
-        add(i, gravity_column[c], unit);
+        entries.add(i, layout.gravity[c], unit);
       }
-      // Rows weighted by h^2 / m: residuals in metres (the one-step error with raw differences).
       const double w = h * h / m;
-      const Eigen::Vector3d rhs = w * (m * acc[i] - known_force[i]);
-      std::vector<std::pair<int, Eigen::Vector3d>> row(entries[i].begin(), entries[i].end());
-      for (auto& e : row) e.second *= w;
-      for (size_t p = 0; p < row.size(); ++p) {
-        atb[row[p].first] += row[p].second.dot(rhs);
-        for (size_t q = 0; q <= p; ++q) {
-          const double v = row[p].second.dot(row[q].second);
-          ata(row[p].first, row[q].first) += v;
-          if (q != p) ata(row[q].first, row[p].first) += v;
-        }
-      }
-      btb += rhs.squaredNorm();
-      out.rows += 3;
+      accumulateRows(entries.of(i), w, w * (m * acc[i] - known_force[i]), out);
     }
   }
+}
+
+}  // namespace
+
+EquationErrorSystem buildEquationErrorSystem(const Model& model, const Trajectory& trajectory,
+                                             const EquationErrorOptions& options) {
+  EquationErrorSystem out;
+  const std::vector<ParamRef> refs = freeParameters(model);
+  const double rate_hz = model.frame_rate_hz > 0.0 ? model.frame_rate_hz : trajectory.frame_rate_hz;
+  if (!(rate_hz > 0.0) || trajectory.numMarkers() != static_cast<int>(model.particles.size())) {
+    out.reason = "no frame rate, or the trajectory's markers are not the model's particles";
+    return out;
+  }
+  ColumnLayout layout;
+  layout.types.resize(model.bond_types.size());
+  out.reason = placeParameterColumns(model, refs, options, &layout);
+  if (out.reason.empty()) out.reason = checkKnownForces(model);
+  if (!out.reason.empty()) return out;
+  placeRestColumns(model, refs, &layout);
+
+  const double h = 1.0 / rate_hz;
+  const size_t nc = layout.columns.size();
+  out.ata = Eigen::MatrixXd::Zero(nc, nc);
+  out.atb = Eigen::VectorXd::Zero(nc);
+  accumulateFrames(model, trajectory, layout, Kinematics(options.smoothing_half_width, h), h, &out);
   if (out.rows == 0) {
     out.reason = "no frame with every sample a row needs";
     return out;
   }
-  for (const Column& c : columns) {
+  for (const Column& c : layout.columns) {
     out.column_param.push_back(c.param);
     out.column_partner.push_back(c.role == Role::kProduct ? c.partner : -1);
     out.column_offset.push_back(c.offset);

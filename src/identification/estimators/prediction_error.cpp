@@ -76,6 +76,110 @@ bool fillFromNeighbours(const Observations& obs, const Model& model, int t, int 
   return false;
 }
 
+namespace {
+
+constexpr size_t kPredictors = 4;  ///< model, constant velocity, constant acceleration, gravity only
+
+Eigen::Map<const Eigen::Vector3d> seenAt(const Observations& obs, int t, int i) {
+  return Eigen::Map<const Eigen::Vector3d>(obs.position(t, i));
+}
+
+/// The start state at frame t: every particle's position at t and its velocity, from the latest
+/// of the kMaxVelocityGap frames before t where it is seen (x(t-1) when seen: the paper's start).
+/// A particle unseen at t, or not seen in those frames, is filled from its neighbours' rigid
+/// motion (fillFromNeighbours: data up to t only; counted in *filled). A fixed particle moves as
+/// the model says, seen or not. False when a particle cannot be placed.
+bool startState(const Observations& obs, const Model& model, int t, State* s, int* filled) {
+  const int n = obs.particles;
+  const double h = obs.frame_period_s;
+  *filled = 0;
+  s->x_m.assign(n, Eigen::Vector3d::Zero());
+  s->v_mps.assign(n, Eigen::Vector3d::Zero());
+  for (int i = 0; i < n; ++i) {
+    if (model.particles[i].fixed) {
+      s->x_m[i] = obs.isOccluded(t, i) ? model.particles[i].position_m : Eigen::Vector3d(seenAt(obs, t, i));
+      s->v_mps[i] = model.particles[i].velocity_mps;
+      continue;
+    }
+    int back = 0;
+    if (!obs.isOccluded(t, i))
+      for (int j = 1; j <= kMaxVelocityGap && t - j >= 0 && back == 0; ++j)
+        if (!obs.isOccluded(t - j, i)) back = j;
+    if (back > 0) {
+      s->x_m[i] = seenAt(obs, t, i);
+      s->v_mps[i] = (seenAt(obs, t, i) - seenAt(obs, t - back, i)) / (back * h);
+      continue;
+    }
+    Eigen::Vector3d now, before;
+    if (!fillFromNeighbours(obs, model, t, i, &now) || !fillFromNeighbours(obs, model, t - 1, i, &before))
+      return false;
+    s->x_m[i] = now;
+    s->v_mps[i] = (now - before) / h;
+    ++*filled;
+  }
+  return true;
+}
+
+/// Muscles with activation dynamics start where the data's motion puts them: at t - 1 (its
+/// velocity from t - 2), the activations that explain each particle's acceleration
+/// x(t) - 2 x(t-1) + x(t-2) over h^2 (particles seen in those three frames; the constant-
+/// acceleration guess's), then one frame of their dynamics to t. The others are placed at t - 1
+/// by their start velocity.
+void startActivations(const Observations& obs, const Model& model, int t, Simulator* sim, State* s) {
+  s->activation_n.clear();
+  if (!sim->hasActivationState()) return;
+  const int n = obs.particles;
+  const double h = obs.frame_period_s;
+  State before = *s;
+  std::vector<Eigen::Vector3d> acceleration(n, Eigen::Vector3d::Zero());
+  std::vector<char> known(n, 0);
+  for (int i = 0; i < n; ++i) {
+    if (model.particles[i].fixed) continue;
+    if (!obs.isOccluded(t, i) && !obs.isOccluded(t - 1, i) && !obs.isOccluded(t - 2, i)) {
+      before.x_m[i] = seenAt(obs, t - 1, i);
+      before.v_mps[i] = (seenAt(obs, t - 1, i) - seenAt(obs, t - 2, i)) / h;
+      acceleration[i] = (seenAt(obs, t, i) - 2.0 * seenAt(obs, t - 1, i) + seenAt(obs, t - 2, i)) / (h * h);
+      known[i] = 1;
+    } else {
+      before.x_m[i] = s->x_m[i] - h * s->v_mps[i];
+    }
+  }
+  sim->estimateActivations(&before, acceleration, known);
+  sim->stepFrame(&before, h);
+  s->activation_n = before.activation_n;
+}
+
+/// Squared errors of every predictor at every horizon in reach of the model's open-loop path
+/// from start t, where all are defined (the particle seen at t-2, t-1, t and t+K).
+void scoreStart(const Observations& obs, const Model& model, const std::vector<int>& horizons, int t,
+                const std::vector<std::vector<Eigen::Vector3d>>& path, const Eigen::Vector3d& g,
+                std::vector<double>* sum2, std::vector<long>* count) {
+  const int reach = static_cast<int>(path.size()) - 1;
+  const double h = obs.frame_period_s;
+  for (size_t hi = 0; hi < horizons.size(); ++hi) {
+    const int K = horizons[hi];
+    if (K > reach) continue;
+    const double kk = 0.5 * K * (K + 1);
+    for (int i = 0; i < obs.particles; ++i) {
+      if (model.particles[i].fixed || obs.isOccluded(t + K, i) || obs.isOccluded(t - 1, i) ||
+          obs.isOccluded(t - 2, i))
+        continue;
+      const Eigen::Vector3d x_t = seenAt(obs, t, i);
+      const Eigen::Vector3d d1 = x_t - seenAt(obs, t - 1, i);
+      const Eigen::Vector3d d2 = x_t - 2.0 * seenAt(obs, t - 1, i) + seenAt(obs, t - 2, i);
+      const Eigen::Vector3d guess[kPredictors] = {path[K][i], x_t + K * d1, x_t + K * d1 + kk * d2,
+                                                  x_t + K * d1 + kk * h * h * g};
+      for (size_t p = 0; p < kPredictors; ++p) {
+        const Eigen::Vector3d e = guess[p] - seenAt(obs, t + K, i);
+        (*sum2)[hi * kPredictors + p] += e.allFinite() ? e.squaredNorm() : 1e300;
+        (*count)[hi * kPredictors + p] += 3;
+      }
+    }
+  }
+}
+
+}  // namespace
+
 PredictionReport evaluatePredictions(const Model& model, const Trajectory& trajectory,
                                      const std::vector<int>& horizons, double rollout_factor,
                                      int first_start) {
@@ -83,82 +187,25 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
   if (horizons.empty()) throw InputError("no horizon to evaluate");
   for (int k : horizons)
     if (k < 1) throw InputError("horizons must be >= 1 frame, got " + std::to_string(k));
-  const int n = obs.particles, frames = obs.frames;
+  const int frames = obs.frames;
   const int max_k = *std::max_element(horizons.begin(), horizons.end());
   const double h = obs.frame_period_s;
   Model sim_model = model;
   sim_model.frame_rate_hz = obs.frame_rate_hz;
   Simulator sim(sim_model);
   const Eigen::Vector3d g = sim_model.gravity();
-  const auto x = [&](int t, int i) { return Eigen::Map<const Eigen::Vector3d>(obs.position(t, i)); };
 
   PredictionReport report;
-  const size_t predictors = 4;
-  std::vector<double> sum2(horizons.size() * predictors, 0.0);
-  std::vector<long> count(horizons.size() * predictors, 0);
+  std::vector<double> sum2(horizons.size() * kPredictors, 0.0);
+  std::vector<long> count(horizons.size() * kPredictors, 0);
   State s, first_state;  // first_state: the first start's, the long rollout's
   const int judged_from = std::max(first_start - 2, 0);  // the judged frames' first
   for (int t = std::max(first_start, 2); t + 1 < frames; ++t) {
-    // A start needs every particle's position at t and its velocity: from the latest of the
-    // kMaxVelocityGap frames before t where it is seen (x(t-1) when seen: the paper's start).
-    // A particle unseen at t, or not seen in those frames, is filled from its neighbours' rigid
-    // motion (fillFromNeighbours: data up to t only); it is not scored from this start. A fixed
-    // particle moves as the model says, seen or not.
-    bool usable = true;
     int filled = 0;
-    s.x_m.assign(n, Eigen::Vector3d::Zero());
-    s.v_mps.assign(n, Eigen::Vector3d::Zero());
-    for (int i = 0; i < n && usable; ++i) {
-      if (model.particles[i].fixed) {
-        s.x_m[i] = obs.isOccluded(t, i) ? model.particles[i].position_m : Eigen::Vector3d(x(t, i));
-        s.v_mps[i] = model.particles[i].velocity_mps;
-        continue;
-      }
-      int back = 0;
-      if (!obs.isOccluded(t, i))
-        for (int j = 1; j <= kMaxVelocityGap && t - j >= 0 && back == 0; ++j)
-          if (!obs.isOccluded(t - j, i)) back = j;
-      if (back > 0) {
-        s.x_m[i] = x(t, i);
-        s.v_mps[i] = (x(t, i) - x(t - back, i)) / (back * h);
-        continue;
-      }
-      Eigen::Vector3d now, before;
-      usable = fillFromNeighbours(obs, model, t, i, &now) &&
-               fillFromNeighbours(obs, model, t - 1, i, &before);
-      if (!usable) break;
-      s.x_m[i] = now;
-      s.v_mps[i] = (now - before) / h;
-      ++filled;
-    }
-    if (!usable) continue;
+    if (!startState(obs, model, t, &s, &filled)) continue;
     ++report.starts;
     report.filled += filled;
-    // Muscles with activation dynamics start where the data's motion puts them: at t - 1 (its
-    // velocity from t - 2), the activations that explain each particle's acceleration
-    // x(t) - 2 x(t-1) + x(t-2) over h^2 (particles seen in those three frames; the constant-
-    // acceleration guess's), then one frame of their dynamics to t. The others are placed at
-    // t - 1 by their start velocity.
-    s.activation_n.clear();
-    if (sim.hasActivationState()) {
-      State before = s;
-      std::vector<Eigen::Vector3d> acceleration(n, Eigen::Vector3d::Zero());
-      std::vector<char> known(n, 0);
-      for (int i = 0; i < n; ++i) {
-        if (model.particles[i].fixed) continue;
-        if (!obs.isOccluded(t, i) && !obs.isOccluded(t - 1, i) && !obs.isOccluded(t - 2, i)) {
-          before.x_m[i] = x(t - 1, i);
-          before.v_mps[i] = (x(t - 1, i) - x(t - 2, i)) / h;
-          acceleration[i] = (x(t, i) - 2.0 * x(t - 1, i) + x(t - 2, i)) / (h * h);
-          known[i] = 1;
-        } else {
-          before.x_m[i] = s.x_m[i] - h * s.v_mps[i];
-        }
-      }
-      sim.estimateActivations(&before, acceleration, known);
-      sim.stepFrame(&before, h);
-      s.activation_n = before.activation_n;
-    }
+    startActivations(obs, model, t, &sim, &s);
     // The model's open-loop motion from the start, up to the longest horizon in reach.
     const int reach = std::min(max_k, frames - 1 - t);
     if (first_state.x_m.empty()) first_state = s;
@@ -168,37 +215,18 @@ PredictionReport evaluatePredictions(const Model& model, const Trajectory& traje
       sim.stepFrame(&s, h);
       path[k] = s.x_m;
     }
-    for (size_t hi = 0; hi < horizons.size(); ++hi) {
-      const int K = horizons[hi];
-      if (K > reach) continue;
-      const double kk = 0.5 * K * (K + 1);
-      for (int i = 0; i < n; ++i) {
-        // Scored where every predictor is defined: the particle seen at t-2, t-1, t and t+K.
-        if (model.particles[i].fixed || obs.isOccluded(t + K, i) || obs.isOccluded(t - 1, i) ||
-            obs.isOccluded(t - 2, i))
-          continue;
-        const Eigen::Vector3d d1 = x(t, i) - x(t - 1, i);
-        const Eigen::Vector3d d2 = x(t, i) - 2.0 * x(t - 1, i) + x(t - 2, i);
-        const Eigen::Vector3d guess[4] = {path[K][i], x(t, i) + K * d1, x(t, i) + K * d1 + kk * d2,
-                                          x(t, i) + K * d1 + kk * h * h * g};
-        for (size_t p = 0; p < predictors; ++p) {
-          const Eigen::Vector3d e = guess[p] - x(t + K, i);
-          sum2[hi * predictors + p] += e.allFinite() ? e.squaredNorm() : 1e300;
-          count[hi * predictors + p] += 3;
-        }
-      }
-    }
+    scoreStart(obs, model, horizons, t, path, g, &sum2, &count);
   }
   if (report.starts == 0)
     throw InputError("no frame where every particle is seen or can be placed by the rigid motion "
                      "of 3 neighbours seen with it earlier: nothing to predict from");
   for (size_t hi = 0; hi < horizons.size(); ++hi)
-    for (size_t p = 0; p < predictors; ++p) {
+    for (size_t p = 0; p < kPredictors; ++p) {
       PredictionError row;
       row.horizon = horizons[hi];
       row.predictor = static_cast<Predictor>(p);
-      row.samples = count[hi * predictors + p];
-      row.rms_m = row.samples > 0 ? std::sqrt(sum2[hi * predictors + p] / row.samples)
+      row.samples = count[hi * kPredictors + p];
+      row.rms_m = row.samples > 0 ? std::sqrt(sum2[hi * kPredictors + p] / row.samples)
                                   : std::numeric_limits<double>::quiet_NaN();
       report.rows.push_back(row);
     }

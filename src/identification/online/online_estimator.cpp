@@ -40,6 +40,85 @@ void checkModel(const Model& model, bool allow_no_free_parameter) {
   if (!allow_no_free_parameter && freeParameters(model).empty())
     throw InputError("model: no free parameter to identify");
 }
+
+/// The search for a new model: the refinement runs beside the generations (startRefinement), not
+/// inside them; with resume_from_model_values and a complete set of values in the model, the
+/// first population starts there.
+std::unique_ptr<EvolutionStrategy> makeSearch(const Model& model, const Trajectory& window,
+                                              const OnlineEstimatorOptions& options) {
+  EsOptions es_options = options.es;
+  es_options.refine_period = 0;
+  auto es = std::make_unique<EvolutionStrategy>(ParameterSpace(model, window), es_options);
+  if (!options.resume_from_model_values) return es;
+  std::vector<double> values;
+  for (size_t k = 0; k < es->space().size(); ++k) {
+    const Param& p = paramOf(model, es->space().gene(k).ref);
+    if (!p.has_value) break;
+    values.push_back(p.value);
+  }
+  if (values.size() == es->space().size()) {
+    std::vector<double> genes = es->space().toSearch(values);
+    for (size_t k = 0; k < genes.size(); ++k) genes[k] = es->space().reflect(k, genes[k]);
+    es->setInitialGuess(genes, 1e-3);
+  }
+  return es;
+}
+
+/// 1-sigma from the spread of the elite (best fifth, at least 2) of the population: cheap enough
+/// to do at every update, unlike the Hessian used offline. NaN with fewer than 2 individuals.
+std::vector<double> eliteStdDevs(const EvolutionStrategy& es, size_t parameters) {
+  std::vector<const Individual*> sorted;
+  for (const Individual& ind : es.population()) sorted.push_back(&ind);
+  std::sort(sorted.begin(), sorted.end(),
+            [](const Individual* a, const Individual* b) { return a->cost < b->cost; });
+  const size_t elite = std::max<size_t>(2, sorted.size() / 5);
+  std::vector<double> std_devs(parameters, std::numeric_limits<double>::quiet_NaN());
+  if (sorted.size() < 2) return std_devs;
+  const size_t used = std::min(elite, sorted.size());
+  std::vector<std::vector<double>> values(used);
+  for (size_t j = 0; j < used; ++j) values[j] = es.space().toPhysical(sorted[j]->genes);
+  for (size_t k = 0; k < parameters; ++k) {
+    double mean = 0, sq = 0;
+    for (size_t j = 0; j < used; ++j) mean += values[j][k];
+    mean /= used;
+    for (size_t j = 0; j < used; ++j) sq += (values[j][k] - mean) * (values[j][k] - mean);
+    std_devs[k] = std::sqrt(sq / (used - 1));
+  }
+  return std_devs;
+}
+
+/// Per parameter: at a search bound, or (from an output-error fit) undetermined by the data.
+std::vector<ParameterFlag> parameterFlags(const ParameterSpace& space, const std::vector<double>& genes,
+                                          const OutputErrorResult* output_error) {
+  std::vector<ParameterFlag> flags(space.size(), ParameterFlag::kNone);
+  for (size_t k = 0; k < space.size(); ++k) {
+    const int side = space.boundSide(k, genes[k]);
+    if (side < 0) flags[k] = ParameterFlag::kAtLowerBound;
+    else if (side > 0) flags[k] = ParameterFlag::kAtUpperBound;
+    else if (output_error && output_error->unidentifiable[k]) flags[k] = ParameterFlag::kUnidentifiable;
+  }
+  return flags;
+}
+
+/// Stability: a long rollout (`rollout_frames`) of `best` from the window start keeps its free
+/// particles near the box the window sees them in (RolloutBound, as evaluate judges; fixed ones,
+/// such as anchors far off the body, are not judged). No rollout (a hidden free particle that
+/// cannot be placed, which is also the case when no free particle is seen): not stable.
+bool staysBounded(const Model& best, const Trajectory& window, int rollout_frames) {
+  const Trajectory long_run = OnlineEstimator::rollout(best, window, rollout_frames);
+  if (long_run.positions_m.empty()) return false;
+  const RolloutBound bound = RolloutBound::of(best, prepareObservations(best, window), 0, window.numFrames());
+  const auto first = long_run.positions_m.begin();
+  const int n = long_run.numMarkers();
+  std::vector<Eigen::Vector3d> frame_x_m(static_cast<size_t>(n));  // one frame's, reused
+  for (int t = 0; t < long_run.numFrames(); ++t) {
+    std::copy(first + t * n, first + (t + 1) * n, frame_x_m.begin());
+    if (!bound.holds(best, frame_x_m)) return false;
+  }
+  return true;
+}
+
+
 }  // namespace
 
 struct OnlineEstimator::BackgroundRefinement {
@@ -288,27 +367,10 @@ bool OnlineEstimator::update() {
   auto cost = std::make_shared<ShortTermCost>(model, window_data);
   if (cost->termCount() == 0) return false;
   if (!es_) {
-    // The refinement runs beside the generations (startRefinement), not inside them.
-    EsOptions es_options = options_.es;
-    es_options.refine_period = 0;
-    es_ = std::make_unique<EvolutionStrategy>(ParameterSpace(model, window_data), es_options);
+    es_ = makeSearch(model, window_data, options_);
     use_output_error_ = options_.cost == CostChoice::kOutputError ||
                         (options_.cost == CostChoice::kAuto &&
                          estimateMarkerNoise(window_data) >= options_.auto_noise_threshold_m);
-    if (options_.resume_from_model_values) {
-      std::vector<double> values;
-      for (size_t k = 0; k < es_->space().size(); ++k) {
-        const ParamRef& ref = es_->space().gene(k).ref;
-        const Param& p = paramOf(model, ref);
-        if (!p.has_value) break;
-        values.push_back(p.value);
-      }
-      if (values.size() == es_->space().size()) {
-        std::vector<double> genes = es_->space().toSearch(values);
-        for (size_t k = 0; k < genes.size(); ++k) genes[k] = es_->space().reflect(k, genes[k]);
-        es_->setInitialGuess(genes, 1e-3);
-      }
-    }
   }
   es_->setCost(cost);  // re-evaluates the living population on the new window
   handOverRefinement();
@@ -346,26 +408,7 @@ bool OnlineEstimator::update() {
   e.estimator = Estimator::kShortTerm;
   std::vector<double> genes = es_->best().genes;
   const bool from_output_error = use_output_error_ && output_error_.ran;
-  // 1-sigma from the spread of the elite (best fifth) of the population: cheap enough to do
-  // at every update, unlike the Hessian used offline.
-  std::vector<const Individual*> sorted;
-  for (const Individual& ind : es_->population()) sorted.push_back(&ind);
-  std::sort(sorted.begin(), sorted.end(),
-            [](const Individual* a, const Individual* b) { return a->cost < b->cost; });
-  const size_t elite = std::max<size_t>(2, sorted.size() / 5);
-  e.std_devs.assign(e.values.size(), std::numeric_limits<double>::quiet_NaN());
-  if (sorted.size() >= 2) {
-    const size_t used = std::min(elite, sorted.size());
-    std::vector<std::vector<double>> values(used);
-    for (size_t j = 0; j < used; ++j) values[j] = es_->space().toPhysical(sorted[j]->genes);
-    for (size_t k = 0; k < e.values.size(); ++k) {
-      double mean = 0, sq = 0;
-      for (size_t j = 0; j < used; ++j) mean += values[j][k];
-      mean /= used;
-      for (size_t j = 0; j < used; ++j) sq += (values[j][k] - mean) * (values[j][k] - mean);
-      e.std_devs[k] = std::sqrt(sq / (used - 1));
-    }
-  }
+  e.std_devs = eliteStdDevs(*es_, e.values.size());
   if (from_output_error) {
     // The published values are the output-error fit's, with its std (from its Jacobian).
     e.estimator = Estimator::kOutputError;
@@ -375,34 +418,11 @@ bool OnlineEstimator::update() {
     e.noise_std_m = output_error_.noise_std_m;
     genes = output_error_.genes;
   }
-  e.parameter_flags.assign(e.values.size(), ParameterFlag::kNone);
-  for (size_t k = 0; k < es_->space().size(); ++k) {
-    const int side = es_->space().boundSide(k, genes[k]);
-    if (side < 0) e.parameter_flags[k] = ParameterFlag::kAtLowerBound;
-    else if (side > 0) e.parameter_flags[k] = ParameterFlag::kAtUpperBound;
-    else if (from_output_error && output_error_.unidentifiable[k]) e.parameter_flags[k] = ParameterFlag::kUnidentifiable;
-  }
-  // Stability: a long rollout of the best model from the window start keeps its free particles
-  // near the box the window sees them in (RolloutBound, as evaluate judges; fixed ones, such as
-  // anchors far off the body, are not judged). No rollout (a hidden free particle that cannot be
-  // placed, which is also the case when no free particle is seen): not stable.
+  e.parameter_flags = parameterFlags(es_->space(), genes, from_output_error ? &output_error_ : nullptr);
   Model best = model;
   setValues(best, es_->space().refs(), e.values);
-  const int rollout_frames =
-      static_cast<int>(options_.stability_rollout_factor * window_data.numFrames());
-  const Trajectory long_run = rollout(best, window_data, rollout_frames);
-  if (!long_run.positions_m.empty()) {
-    const RolloutBound bound =
-        RolloutBound::of(best, prepareObservations(best, window_data), 0, window_data.numFrames());
-    const auto first = long_run.positions_m.begin();
-    const int n = long_run.numMarkers();
-    std::vector<Eigen::Vector3d> frame_x_m(static_cast<size_t>(n));  // one frame's, reused
-    e.stable = true;
-    for (int t = 0; e.stable && t < long_run.numFrames(); ++t) {
-      std::copy(first + t * n, first + (t + 1) * n, frame_x_m.begin());
-      e.stable = bound.holds(best, frame_x_m);
-    }
-  }
+  e.stable = staysBounded(best, window_data,
+                          static_cast<int>(options_.stability_rollout_factor * window_data.numFrames()));
   // A reset() or replaceModel() during this update makes its result stale: drop it.
   std::lock_guard<std::mutex> model_lock(model_mutex_);
   if (model_version_ != version) return false;

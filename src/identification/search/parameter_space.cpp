@@ -103,140 +103,159 @@ std::vector<double> thresholdLengths(const Model& model, const Trajectory& traje
 
 }  // namespace
 
-ParameterSpace::ParameterSpace(const Model& model, const Trajectory& trajectory) {
+namespace {
+
+/// Default physical search bounds of a parameter: scaled by what is known (the observed bond
+/// lengths `observed_m` for a length, the guess for a floor height).
+void defaultBounds(const Model& model, const ParamRef& ref, const Param& p, double observed_m,
+                   double* lo, double* hi) {
+  if (ref.bond_type < 0) {  // gravity
+    *lo = -30.0; *hi = 30.0;
+  } else if (ref.param == kRestAngle) {
+    *lo = 0.0; *hi = M_PI;
+  } else if (ref.param == kMaxElongation) {
+    *lo = 1e-3; *hi = 10.0;
+  } else if (ref.param == kContactDepth) {
+    *lo = 1e-6; *hi = 0.1;  // a micrometre to 10 cm of penetration
+  } else if (ref.param == kHeight) {
+    const double guess = p.has_value ? p.value : 0.0;
+    *lo = guess - kFloorHeightRange_m;
+    *hi = guess + kFloorHeightRange_m;
+  } else if (ref.isNetwork()) {
+    *hi = isNetworkBias(model, ref) ? kNetworkBiasBound : kNetworkWeightBound;
+    *lo = -*hi;
+  } else if (isLengthLike(ref.param)) {
+    const double scale = observed_m > 0.0 ? observed_m : (p.has_value && p.value > 0 ? p.value : 1.0);
+    *lo = scale / 3.0; *hi = scale * 3.0;
+  } else {
+    *lo = 1e-4; *hi = 1e4;
+  }
+}
+
+/// The gene's search bounds: the model's when given, else the defaults; in log space for a
+/// log-scaled gene. Throws InputError on empty or infinite bounds.
+void setSearchBounds(const Model& model, const Param& p, double observed_m, Gene* g) {
+  // `min: 0` (non-negative) keeps a log-scaled gene with the default lower bound (a value of
+  // exactly 0 is not representable, a value 1e-8 of the range is).
+  const bool user_min = p.has_min && !(g->log_scale && p.min <= 0.0);
+  double lo, hi;
+  defaultBounds(model, g->ref, p, observed_m, &lo, &hi);
+  if (user_min) lo = p.min;
+  if (p.has_max) hi = p.max;
+  if (g->log_scale) {
+    lo = std::max(lo, 1e-12);
+    if (!user_min && p.has_max && !(lo < hi)) lo = hi * 1e-8;  // min: 0 below a small max
+    if (!(hi > lo)) hi = lo * 10.0;
+  }
+  g->user_lower = user_min;
+  g->user_upper = p.has_max;
+  if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi))
+    throw InputError("parameter '" + g->ref.name + "': empty or infinite search bounds");
+  g->lower = g->log_scale ? std::log(lo) : lo;
+  g->upper = g->log_scale ? std::log(hi) : hi;
+}
+
+/// The initial distribution (the paper): lengths around the average observed distance, others
+/// log-Gaussian; an initial guess in the model file centres it.
+void setInitialDistribution(const Param& p, double observed_m, Gene* g) {
+  const double range = g->upper - g->lower;
+  if (g->ref.param == kRestLength && observed_m > 0.0 && !p.has_value) {
+    g->init_center = g->log_scale ? std::log(observed_m) : observed_m;
+    g->init_spread = g->log_scale ? 0.1 : 0.1 * observed_m;
+  } else if (p.has_value && (!g->log_scale || p.value > 0.0)) {
+    g->init_center = g->log_scale ? std::log(p.value) : p.value;
+    g->init_spread = range / 6.0;
+  } else {
+    g->init_center = 0.5 * (g->lower + g->upper);
+    g->init_spread = range / 6.0;
+  }
+  g->init_center = std::min(std::max(g->init_center, g->lower), g->upper);
+}
+
+/// A threshold gene's breakpoints: the observed lengths of its type's bonds inside the bounds
+/// (search coordinates), sorted, at most kMaxBreakpoints spread evenly.
+std::vector<double> breakpointsOf(const Model& model, const Trajectory& trajectory, const Gene& g) {
+  std::vector<double> lengths = thresholdLengths(model, trajectory, g.ref.bond_type);
+  for (double& l : lengths) l = g.log_scale ? std::log(l) : l;
+  lengths.erase(std::remove_if(lengths.begin(), lengths.end(),
+                               [&g](double v) { return !(v > g.lower && v < g.upper); }),
+                lengths.end());
+  std::sort(lengths.begin(), lengths.end());
+  lengths.erase(std::unique(lengths.begin(), lengths.end()), lengths.end());
+  constexpr size_t kMaxBreakpoints = ParameterSpace::kMaxBreakpoints;
+  if (lengths.size() > kMaxBreakpoints) {
+    std::vector<double> kept(kMaxBreakpoints);
+    for (size_t q = 0; q < kMaxBreakpoints; ++q)
+      kept[q] = lengths[q * (lengths.size() - 1) / (kMaxBreakpoints - 1)];
+    lengths.swap(kept);
+  }
+  return lengths;
+}
+
+/// The gene of one free parameter.
+Gene makeGene(const Model& model, const Trajectory& trajectory, const ParamRef& ref) {
+  const Param& p = paramOf(model, ref);
+  Gene g;
+  g.ref = ref;
+  g.has_initial = p.has_value;
+  const bool is_gravity = ref.bond_type < 0;
+  g.smooth = is_gravity || (ref.param != kMinDistance && ref.param != kMaxDistance);
+  g.log_scale = !is_gravity && isLogSearched(ref.param);  // positive magnitudes
+  const double observed_m =
+      (!is_gravity && isLengthLike(ref.param)) ? averageObservedLength(model, trajectory, ref.bond_type) : 0.0;
+  setSearchBounds(model, p, observed_m, &g);
+  setInitialDistribution(p, observed_m, &g);
+  if (!g.smooth) g.breakpoints = breakpointsOf(model, trajectory, g);
+  return g;
+}
+
+/// Provot's tau becomes a clamp length (see Gene::clamp_length). With tau as the coordinate the
+/// optimum is a needle: for tau above (longest observed / L - 1) the clamp is off and the cost
+/// flat, just below it the clamp shortens observed bonds; and that point moves with L.
+/// `type_genes`: the genes of the gene's bond type.
+void makeClampLength(const Model& model, const Trajectory& trajectory, const std::vector<int>& type_genes,
+                     std::vector<Gene>* genes, size_t k) {
+  Gene& g = (*genes)[k];
+  const int type = g.ref.bond_type;
+  const Param& rest = model.bond_types[type].params[kRestLength];
+  const Param& tau = model.bond_types[type].params[kMaxElongation];
+  double rest_lo, rest_hi, rest_guess;
+  int rest_gene = -1;
+  for (int j : type_genes)
+    if ((*genes)[j].ref.param == kRestLength && (*genes)[j].log_scale) rest_gene = j;
+  if (rest_gene >= 0) {
+    rest_lo = std::exp((*genes)[rest_gene].lower);
+    rest_hi = std::exp((*genes)[rest_gene].upper);
+    rest_guess = std::exp((*genes)[rest_gene].init_center);
+  } else if (rest.has_value && rest.value > 0.0 && !rest.free) {
+    rest_lo = rest_hi = rest_guess = rest.value;
+  } else {
+    return;  // rest length free but not log-scaled: keep tau as it is
+  }
+  g.clamp_length = true;
+  g.rest_gene = rest_gene;
+  g.fixed_rest_length_m = rest_gene >= 0 ? 0.0 : rest_guess;
+  g.tau_lower = std::exp(g.lower);
+  g.tau_upper = std::exp(g.upper);
+  g.lower = std::log((1.0 + g.tau_lower) * rest_lo);
+  g.upper = std::log((1.0 + g.tau_upper) * rest_hi);
+  const double longest = maxObservedLength(model, trajectory, type);
+  if (tau.has_value && tau.value > 0.0) {
+    g.init_center = std::log((1.0 + tau.value) * rest_guess);
+    g.init_spread = (g.upper - g.lower) / 6.0;
+  } else if (longest > 0.0) {
+    // Like rest lengths from the average observed distance: the clamp where the longest
+    // observed bond of the type is (exactly right when the clamp acted in the data).
+    g.init_center = std::log(longest);
+    g.init_spread = kClampInitSpread;
+  }
+  g.init_center = std::min(std::max(g.init_center, g.lower), g.upper);
+}
+
+/// The particles each bond type acts on (its bonds' particles; an interaction's groups); the
+/// last slot, gravity's: every free particle.
+std::vector<std::set<int>> sitesOfTypes(const Model& model) {
   const int num_types = static_cast<int>(model.bond_types.size());
-  genes_of_type_.assign(num_types + 1, {});  // last slot: gravity
-  sites_of_type_.assign(num_types + 1, {});
-
-  for (const ParamRef& ref : freeParameters(model)) {
-    const Param& p = paramOf(model, ref);
-    Gene g;
-    g.ref = ref;
-    g.has_initial = p.has_value;
-    const bool is_gravity = ref.bond_type < 0;
-    g.smooth = is_gravity || (ref.param != kMinDistance && ref.param != kMaxDistance);
-    // Positive physical parameters are searched in log space; `min: 0` (non-negative) keeps
-    // them there with the default lower bound (a value of exactly 0 is not representable, a
-    // value 1e-8 of the range is).
-    g.log_scale = !is_gravity && isLogSearched(ref.param);
-    const bool user_min = p.has_min && !(g.log_scale && p.min <= 0.0);
-    // Physical bounds: the model's when given, else defaults scaled by what is known.
-    double lo, hi;
-    const double observed =
-        (!is_gravity && isLengthLike(ref.param))
-            ? averageObservedLength(model, trajectory, ref.bond_type) : 0.0;
-    if (is_gravity) {
-      lo = -30.0; hi = 30.0;
-    } else if (ref.param == kRestAngle) {
-      lo = 0.0; hi = M_PI;
-    } else if (ref.param == kMaxElongation) {
-      lo = 1e-3; hi = 10.0;
-    } else if (ref.param == kContactDepth) {
-      lo = 1e-6; hi = 0.1;  // a micrometre to 10 cm of penetration
-    } else if (ref.param == kHeight) {
-      const double guess = p.has_value ? p.value : 0.0;
-      lo = guess - kFloorHeightRange_m;
-      hi = guess + kFloorHeightRange_m;
-    } else if (ref.isNetwork()) {
-      hi = isNetworkBias(model, ref) ? kNetworkBiasBound : kNetworkWeightBound;
-      lo = -hi;
-    } else if (isLengthLike(ref.param)) {
-      const double scale = observed > 0.0 ? observed : (p.has_value && p.value > 0 ? p.value : 1.0);
-      lo = scale / 3.0; hi = scale * 3.0;
-    } else {
-      lo = 1e-4; hi = 1e4;
-    }
-    if (user_min) lo = p.min;
-    if (p.has_max) hi = p.max;
-    if (g.log_scale) {
-      lo = std::max(lo, 1e-12);
-      if (!user_min && p.has_max && !(lo < hi)) lo = hi * 1e-8;  // min: 0 below a small max
-      if (!(hi > lo)) hi = lo * 10.0;
-    }
-    g.user_lower = user_min;
-    g.user_upper = p.has_max;
-    if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi))
-      throw InputError("parameter '" + ref.name + "': empty or infinite search bounds");
-    g.lower = g.log_scale ? std::log(lo) : lo;
-    g.upper = g.log_scale ? std::log(hi) : hi;
-    // Initial distribution (the paper): lengths around the average observed distance, others
-    // log-Gaussian; an initial guess in the model file centres it.
-    const double range = g.upper - g.lower;
-    if (ref.param == kRestLength && observed > 0.0 && !p.has_value) {
-      g.init_center = g.log_scale ? std::log(observed) : observed;
-      g.init_spread = g.log_scale ? 0.1 : 0.1 * observed;
-    } else if (p.has_value && (!g.log_scale || p.value > 0.0)) {
-      g.init_center = g.log_scale ? std::log(p.value) : p.value;
-      g.init_spread = range / 6.0;
-    } else {
-      g.init_center = 0.5 * (g.lower + g.upper);
-      g.init_spread = range / 6.0;
-    }
-    g.init_center = std::min(std::max(g.init_center, g.lower), g.upper);
-    if (!g.smooth) {
-      std::vector<double> lengths = thresholdLengths(model, trajectory, ref.bond_type);
-      for (double& l : lengths) l = g.log_scale ? std::log(l) : l;
-      lengths.erase(std::remove_if(lengths.begin(), lengths.end(),
-                                   [&g](double v) { return !(v > g.lower && v < g.upper); }),
-                    lengths.end());
-      std::sort(lengths.begin(), lengths.end());
-      lengths.erase(std::unique(lengths.begin(), lengths.end()), lengths.end());
-      if (lengths.size() > kMaxBreakpoints) {
-        std::vector<double> kept(kMaxBreakpoints);
-        for (size_t q = 0; q < kMaxBreakpoints; ++q)
-          kept[q] = lengths[q * (lengths.size() - 1) / (kMaxBreakpoints - 1)];
-        lengths.swap(kept);
-      }
-      g.breakpoints = std::move(lengths);
-    }
-    const int slot = is_gravity ? num_types : ref.bond_type;
-    genes_of_type_[slot].push_back(static_cast<int>(genes_.size()));
-    genes_.push_back(g);
-  }
-
-  // Provot's tau becomes a clamp length (see Gene::clamp_length). With tau as the coordinate
-  // the optimum is a needle: for tau above (longest observed / L - 1) the clamp is off and the
-  // cost flat, just below it the clamp shortens observed bonds; and that point moves with L.
-  for (size_t k = 0; k < genes_.size(); ++k) {
-    Gene& g = genes_[k];
-    if (g.ref.param != kMaxElongation || g.ref.bond_type < 0 || !g.log_scale) continue;
-    const int type = g.ref.bond_type;
-    const Param& rest = model.bond_types[type].params[kRestLength];
-    const Param& tau = model.bond_types[type].params[kMaxElongation];
-    double rest_lo, rest_hi, rest_guess;
-    int rest_gene = -1;
-    for (int j : genes_of_type_[type])
-      if (genes_[j].ref.param == kRestLength && genes_[j].log_scale) rest_gene = j;
-    if (rest_gene >= 0) {
-      rest_lo = std::exp(genes_[rest_gene].lower);
-      rest_hi = std::exp(genes_[rest_gene].upper);
-      rest_guess = std::exp(genes_[rest_gene].init_center);
-    } else if (rest.has_value && rest.value > 0.0 && !rest.free) {
-      rest_lo = rest_hi = rest_guess = rest.value;
-    } else {
-      continue;  // rest length free but not log-scaled: keep tau as it is
-    }
-    g.clamp_length = true;
-    g.rest_gene = rest_gene;
-    g.fixed_rest_length_m = rest_gene >= 0 ? 0.0 : rest_guess;
-    g.tau_lower = std::exp(g.lower);
-    g.tau_upper = std::exp(g.upper);
-    g.lower = std::log((1.0 + g.tau_lower) * rest_lo);
-    g.upper = std::log((1.0 + g.tau_upper) * rest_hi);
-    const double longest = maxObservedLength(model, trajectory, type);
-    if (tau.has_value && tau.value > 0.0) {
-      g.init_center = std::log((1.0 + tau.value) * rest_guess);
-      g.init_spread = (g.upper - g.lower) / 6.0;
-    } else if (longest > 0.0) {
-      // Like rest lengths from the average observed distance: the clamp where the longest
-      // observed bond of the type is (exactly right when the clamp acted in the data).
-      g.init_center = std::log(longest);
-      g.init_spread = kClampInitSpread;
-    }
-    g.init_center = std::min(std::max(g.init_center, g.lower), g.upper);
-  }
-
-  // Sites of each type.
   std::vector<std::set<int>> sites(num_types + 1);
   for (const Bond& bond : model.bonds) {
     const int arity = kindArity(model.bond_types[bond.type].kind);
@@ -248,6 +267,26 @@ ParameterSpace::ParameterSpace(const Model& model, const Trajectory& trajectory)
         sites[in.type].insert(static_cast<int>(i));
   for (size_t i = 0; i < model.particles.size(); ++i)
     if (!model.particles[i].fixed) sites[num_types].insert(static_cast<int>(i));
+  return sites;
+}
+
+}  // namespace
+
+ParameterSpace::ParameterSpace(const Model& model, const Trajectory& trajectory) {
+  const int num_types = static_cast<int>(model.bond_types.size());
+  genes_of_type_.assign(num_types + 1, {});  // last slot: gravity
+  sites_of_type_.assign(num_types + 1, {});
+  for (const ParamRef& ref : freeParameters(model)) {
+    const int slot = ref.bond_type < 0 ? num_types : ref.bond_type;
+    genes_of_type_[slot].push_back(static_cast<int>(genes_.size()));
+    genes_.push_back(makeGene(model, trajectory, ref));
+  }
+  for (size_t k = 0; k < genes_.size(); ++k) {
+    const Gene& g = genes_[k];
+    if (g.ref.param == kMaxElongation && g.ref.bond_type >= 0 && g.log_scale)
+      makeClampLength(model, trajectory, genes_of_type_[g.ref.bond_type], &genes_, k);
+  }
+  const std::vector<std::set<int>> sites = sitesOfTypes(model);
   for (int t = 0; t <= num_types; ++t) {
     sites_of_type_[t].assign(sites[t].begin(), sites[t].end());
     if (!genes_of_type_[t].empty()) types_with_genes_.push_back(t);
