@@ -7,7 +7,7 @@
 // caller's pool), so the result does not depend on the thread count. Ceres runs the damping
 // (Marquardt scaling, Nielsen's update) and the linear algebra; an iteration callback applies the
 // package's stopping rules (stall, evaluation budget, deadline, cancel flag), and Ceres' own
-// parameter tolerance is the convergence test.
+// parameter tolerance (or a projected gradient that rounds to zero) is the convergence test.
 #pragma once
 
 #include <atomic>
@@ -47,7 +47,7 @@ struct LmResult {
   double cost = 0.0;          ///< its global cost [m^2]
   uint64_t evaluations = 0;   ///< residual evaluations (each = one full-cost evaluation)
   int jacobians = 0;
-  /// kConverged (Ceres' parameter tolerance, or an exact fit), kStalled (stall rule),
+  /// kConverged (Ceres' parameter or gradient tolerance, or an exact fit), kStalled (stall rule),
   /// kNoProgress (no damping lowers the cost, or the model blew up), kEvaluationLimit,
   /// kDeadline (passed, or the next iteration would pass it), kCancelled, kJacobianTooLarge
   /// (not started: the dense Jacobian would exceed max_jacobian_entries).
