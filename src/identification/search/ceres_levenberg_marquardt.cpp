@@ -114,7 +114,8 @@ class StopRules final : public ceres::IterationCallback {
       // Stop before an iteration that would run past the deadline (at the mean evaluation time
       // so far) rather than throw it away half done.
       const auto now = std::chrono::steady_clock::now();
-      const auto per_evaluation = (now - began_) / static_cast<double>(std::max<uint64_t>(run_->evaluations, 1));
+      const auto per_evaluation =
+          (now - began_) / static_cast<double>(std::max<uint64_t>(run_->evaluations, 1));
       if (now + per_evaluation * static_cast<double>(n + 1) > settings_.deadline)
         return stop(RefineStatus::kDeadline);
     }
@@ -218,7 +219,8 @@ LmResult levenbergMarquardt(const Cost& cost, const ParameterSpace& space,
     out.status = RefineStatus::kDeadline;
     return out;
   }
-  if (static_cast<double>(m) * static_cast<double>(n) > static_cast<double>(settings.max_jacobian_entries) ||
+  const double entries = static_cast<double>(m) * static_cast<double>(n);
+  if (entries > static_cast<double>(settings.max_jacobian_entries) ||
       m > static_cast<size_t>(std::numeric_limits<int>::max())) {
     out.status = RefineStatus::kJacobianTooLarge;
     return out;
