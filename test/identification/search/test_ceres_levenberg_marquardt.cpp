@@ -14,6 +14,7 @@
 #include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/search/ceres_levenberg_marquardt.h"
+#include "motion_model_estimation/identification/search/residual_jacobian.h"
 #include "test_helpers.h"
 
 namespace {
@@ -177,6 +178,42 @@ TEST(CeresLevenbergMarquardt, StopsOnTheDeadline) {
 // The other endings: the cancel flag raised during the run (the callback aborts the solve: the
 // best point so far is kept), the stall rule (stall_factor 0: stop after 3 accepted steps, each
 // followed by its Jacobian), and a start where the model blows up (not run).
+TEST(CeresLevenbergMarquardt, ResidualGroupsHoldEveryNonZeroDerivative) {
+  // With substeps a bond type's parameters reach further (a hop per substep).
+  Fixture f;
+  for (int substeps : {1, 3}) {
+    mme::Model model = f.search;
+    model.substeps = substeps;
+    const mme::ShortTermCost cost(model, f.data);
+    const mme::ParameterSpace space(model, f.data);
+    const std::vector<double> start = startOff(space, f.true_values, 0.2);
+    const mme::ResidualGroups groups = cost.residualGroups();
+    ASSERT_GT(groups.residuals.size(), 1u);
+    std::vector<int> group_of(cost.residualCount(), -1);
+    for (size_t g = 0; g < groups.residuals.size(); ++g)
+      for (uint32_t i : groups.residuals[g]) group_of[i] = static_cast<int>(g);
+    std::vector<double> r;
+    cost.residuals(space.toPhysical(start), &r);
+    std::vector<size_t> all(space.size());
+    for (size_t k = 0; k < all.size(); ++k) all[k] = k;
+    mme::ResidualJacobian jac;
+    mme::forwardJacobian(cost, space, start,
+                         Eigen::Map<const Eigen::VectorXd>(r.data(), static_cast<Eigen::Index>(r.size())),
+                         all, UINT64_MAX, nullptr, &jac);
+    size_t stored = 0, listed = 0;
+    for (size_t k = 0; k < all.size(); ++k)
+      for (uint32_t i : jac.rows[k]) {
+        ++stored;
+        const int g = group_of[i];
+        ASSERT_GE(g, 0);
+        const auto& params = groups.parameters[static_cast<size_t>(g)];
+        if (std::binary_search(params.begin(), params.end(), static_cast<uint32_t>(k))) ++listed;
+      }
+    EXPECT_GT(stored, 0u);
+    EXPECT_EQ(listed, stored);
+  }
+}
+
 TEST(CeresLevenbergMarquardt, MapsEachEndingToItsStatus) {
   Fixture f;
   const mme::ParameterSpace space(f.search, f.data);
@@ -202,7 +239,8 @@ TEST(CeresLevenbergMarquardt, MapsEachEndingToItsStatus) {
   no_patience.stall_factor = 0.0;
   const mme::LmResult stalled = mme::levenbergMarquardt(*f.cost, space, start, no_patience, nullptr);
   EXPECT_EQ(stalled.status, mme::RefineStatus::kStalled);
-  EXPECT_EQ(stalled.jacobians, 4);
+  // Three accepted steps; the rule stops before the Jacobian at the third one.
+  EXPECT_EQ(stalled.jacobians, 3);
   EXPECT_LT(stalled.cost, start_cost);
 
   struct Blown final : public mme::Cost {

@@ -2,9 +2,12 @@
 // sum of squared prediction errors, so near the answer a Gauss-Newton model of it is nearly exact
 // and converges in a few Jacobians where a derivative-free quadratic model (BOBYQA) needs
 // thousands of evaluations. Works in the search space (genes), inside the bounds (Ceres' parameter
-// bounds: projected steps, no line search). The residual block's Jacobian is the package's forward
-// difference (residual_jacobian.h: one residual evaluation per gene, columns in parallel on the
-// caller's pool), so the result does not depend on the thread count. Ceres runs the damping
+// bounds: projected steps, no line search). One residual block per residual group of the cost (a
+// particle's residuals, over the bond types that can move it: Cost::residualGroups), so Ceres
+// forms the damped normal equations from the blocks (sparse LDL^T) instead of a dense Jacobian.
+// The blocks' Jacobian is the package's forward difference (residual_jacobian.h: one residual
+// evaluation per gene for all blocks, columns in parallel on the caller's pool), so the result
+// does not depend on the thread count. Ceres runs the damping
 // (Marquardt scaling, Nielsen's update) and the linear algebra; an iteration callback applies the
 // package's stopping rules (stall, evaluation budget, deadline, cancel flag), and Ceres' own
 // parameter tolerance (or a projected gradient that rounds to zero) is the convergence test.
@@ -33,8 +36,9 @@ struct LmSettings {
   double step_tolerance = 1e-10;
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
   const std::atomic<bool>* cancel = nullptr;  ///< raised: stop at the next iteration
-  /// Most entries of the dense Jacobian (residuals x movable genes) Ceres may hold (it keeps a
-  /// few copies of 8 bytes per entry); beyond it the refinement does not start
+  /// Most entries of the Jacobian Ceres may hold (the blocks': each group's residuals x its
+  /// movable genes; residuals x movable genes for a cost without groups; it keeps a few copies
+  /// of 8 bytes per entry); beyond it the refinement does not start
   /// (RefineStatus::kJacobianTooLarge: the caller may fall back to a derivative-free search).
   uint64_t max_jacobian_entries = 40000000;
   /// Genes the search may move (empty = all); the others keep their start value and cost no
@@ -47,10 +51,11 @@ struct LmResult {
   double cost = 0.0;          ///< its global cost [m^2]
   uint64_t evaluations = 0;   ///< residual evaluations (each = one full-cost evaluation)
   int jacobians = 0;
-  /// kConverged (Ceres' parameter or gradient tolerance, or an exact fit), kStalled (stall rule),
+  /// kConverged (Ceres' parameter or gradient tolerance, met by the step the last Jacobian
+  /// predicts, or an exact fit), kStalled (stall rule),
   /// kNoProgress (no damping lowers the cost, or the model blew up), kEvaluationLimit,
   /// kDeadline (passed, or the next iteration would pass it), kCancelled, kJacobianTooLarge
-  /// (not started: the dense Jacobian would exceed max_jacobian_entries).
+  /// (not started: the Jacobian would exceed max_jacobian_entries).
   RefineStatus status = RefineStatus::kNotRun;
 };
 
