@@ -2,16 +2,16 @@
 # The ROS-free build (plain CMake, MME_CORE_ONLY=ON) builds the offline tools and they work on
 # TRC and C3D: simulate writes a TRC, identify finds the scene's parameters from it, evaluate
 # judges the result, convert reads a real C3D capture and writes a TRC; a rosbag is refused with
-# exit 2 and a message saying the ROS build reads it. The build lives outside the repository
-# (like the sanitizer workspace, so rosrun never finds a second copy of the tools):
-# ${XDG_CACHE_HOME:-~/.cache}/motion_model_estimation/core-<repository name>-<path hash>, or
-# $MME_CORE_BUILD when set.
+# exit 2 and a message saying the ROS build reads it. The build directory is the one
+# scripts/bench uses (scripts/core_build_dir.sh: outside the repository), so after the quick
+# benchmark only the tools are compiled here.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/../.." && pwd)
 export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH   # no ROS in this build's environment
 unset CMAKE_PREFIX_PATH ROS_PACKAGE_PATH
-cache=${XDG_CACHE_HOME:-${HOME:?}/.cache}
-build=${MME_CORE_BUILD:-$cache/motion_model_estimation/core-$(basename "$here")-$(printf '%s' "$here" | sha1sum | cut -c1-8)}
+# shellcheck disable=SC1091
+source "$here/scripts/core_build_dir.sh"
+build=$(core_build_dir "$here")
 mkdir -p "$build"
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 
