@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -305,12 +306,236 @@ void dataState(const Problem& p, int t, double* state) {
 
 namespace {
 
+/// Segments of K frames over `frames`; the last one takes the remainder (at least 2 frames).
+std::vector<std::pair<int, int>> segmentsOf(int frames, int K) {
+  std::vector<std::pair<int, int>> segments;
+  for (int first = 0; first < frames - 1; first += K) {
+    int last = std::min(first + K, frames - 1);
+    if (frames - 1 - last < 2 && last < frames - 1) last = frames - 1;
+    segments.emplace_back(first, last);
+    if (last == frames - 1) break;
+  }
+  return segments;
+}
+
+/// The problem's data and weights; "" or why the fit cannot run.
+std::string setUpProblem(const Model& model, const Trajectory& trajectory, const ParameterSpace& space,
+                         const std::vector<double>& start_genes, const OutputErrorOptions& options,
+                         Problem* p, OutputErrorResult* out) {
+  p->obs = prepareObservations(model, trajectory);
+  if (p->obs.frames < 3) return "fewer than 3 frames";
+  p->model = model;
+  p->model.frame_rate_hz = p->obs.frame_rate_hz;
+  p->refs = freeParameters(model);
+  p->space = &space;
+  p->base_genes = start_genes;
+  for (size_t k = 0; k < space.size(); ++k)
+    if (space.gene(k).smooth) p->smooth.push_back(static_cast<int>(k));
+  for (size_t i = 0; i < model.particles.size(); ++i)
+    if (!model.particles[i].fixed) p->free_particles.push_back(static_cast<int>(i));
+  if (p->smooth.empty() || p->free_particles.empty()) return "no smooth free parameter or no free particle";
+  p->h = p->obs.frame_period_s;
+  out->noise_std_prior_m =
+      options.noise_std_m > 0.0 ? options.noise_std_m : std::max(estimateMarkerNoise(trajectory), 1e-9);
+  p->w_obs = 1.0 / out->noise_std_prior_m;
+  p->w_cont = options.continuity_weight / out->noise_std_prior_m;
+  return "";
+}
+
+/// The fit's unknowns: the smooth genes (theta) and one start state per segment, and the
+/// segments' simulations (which outlive the Ceres problem whose blocks read them).
+struct SegmentUnknowns {
+  std::vector<std::pair<int, int>> segments;
+  std::vector<double> theta;
+  std::vector<std::vector<double>> states;
+  std::vector<std::unique_ptr<SegmentSimulation>> sims;
+
+  int count() const { return static_cast<int>(segments.size()); }
+
+  /// The observation part of the cost, unweighted [m^2]; infinite when a simulation fails.
+  double observationCost(const Problem& p) const {
+    double sum = 0.0;
+    for (int s = 0; s < count(); ++s) {
+      std::vector<double> r(3 * sims[s]->observedSamples());
+      if (!sims[s]->rows(theta.data(), states[s].data(), 0, static_cast<int>(r.size()), r.data(),
+                         nullptr, nullptr))
+        return std::numeric_limits<double>::infinity();
+      for (double v : r) sum += v * v;
+    }
+    return sum / (p.w_obs * p.w_obs);
+  }
+};
+
+/// Per segment, the start state whose simulation (theta held) best matches the segment's first
+/// frames: a dense problem of one state, the same residuals as the observations'. Kept only when
+/// it matches the whole segment better: particles unseen in the first frames (occlusion) can make
+/// a fit of a few frames wrong for the rest. `elapsed_s`: the fit's time so far.
+void fitStartStates(Problem* p, const OutputErrorOptions& options, const std::function<double()>& elapsed_s,
+                    SegmentUnknowns* u) {
+  ceres::Solver::Options local;
+  local.linear_solver_type = ceres::DENSE_QR;
+  local.max_num_iterations = 20;
+  local.logging_type = ceres::SILENT;
+  const int frames = p->obs.frames;
+  for (int s = 0; s < u->count() && !(options.cancel && options.cancel->load()); ++s) {
+    if (options.max_time_s > 0.0) {
+      if (elapsed_s() >= options.max_time_s) break;  // the rest keep the data's states
+      local.max_solver_time_in_seconds = options.max_time_s - elapsed_s();
+    }
+    const int first = u->segments[s].first;
+    SegmentSimulation sim(p, first, std::min(first + options.start_state_frames, frames - 1), false, false);
+    if (sim.observedSamples() == 0) continue;
+    ceres::Problem::Options local_options;
+    local_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+    ceres::Problem fit(local_options);
+    fit.AddResidualBlock(new SegmentCost(&sim, p, SegmentCost::Part::kObservations), nullptr,
+                         u->theta.data(), u->states[s].data());
+    fit.SetParameterBlockConstant(u->theta.data());
+    const std::vector<double> from_data = u->states[s];
+    ceres::Solver::Summary fit_summary;
+    ceres::Solve(local, &fit, &fit_summary);
+    SegmentSimulation whole(p, first, u->segments[s].second, false, false);
+    const auto segmentCost = [&](const std::vector<double>& state) {
+      std::vector<double> r(3 * whole.observedSamples());
+      if (!whole.rows(u->theta.data(), state.data(), 0, static_cast<int>(r.size()), r.data(), nullptr, nullptr))
+        return std::numeric_limits<double>::infinity();
+      double sum = 0.0;
+      for (double v : r) sum += v * v;
+      return sum;
+    };
+    if (!fit_summary.IsSolutionUsable() || !(segmentCost(u->states[s]) < segmentCost(from_data)))
+      u->states[s] = from_data;
+  }
+}
+
+/// theta bounded by the genes' bounds, a state block per segment; every observation block first,
+/// then every continuity block: Ceres' threads take blocks in this order, so two threads
+/// simulate two segments rather than one waiting for the other's. Returns the observations.
+int buildProblem(Problem* p, const ParameterSpace& space, SegmentUnknowns* u, ceres::Problem* problem) {
+  const int S = u->count();
+  for (int s = 0; s < S; ++s)
+    u->sims.push_back(std::make_unique<SegmentSimulation>(p, u->segments[s].first, u->segments[s].second, s + 1 < S));
+  problem->AddParameterBlock(u->theta.data(), static_cast<int>(u->theta.size()));
+  for (size_t j = 0; j < p->smooth.size(); ++j) {
+    const Gene& g = space.gene(p->smooth[j]);
+    problem->SetParameterLowerBound(u->theta.data(), static_cast<int>(j), g.lower);
+    problem->SetParameterUpperBound(u->theta.data(), static_cast<int>(j), g.upper);
+  }
+  for (int s = 0; s < S; ++s) problem->AddParameterBlock(u->states[s].data(), p->stateSize());
+  int observations = 0;
+  for (int s = 0; s < S; ++s) {
+    observations += 3 * u->sims[s]->observedSamples();
+    problem->AddResidualBlock(new SegmentCost(u->sims[s].get(), p, SegmentCost::Part::kObservations),
+                              nullptr, u->theta.data(), u->states[s].data());
+  }
+  for (int s = 0; s + 1 < S; ++s)
+    problem->AddResidualBlock(new SegmentCost(u->sims[s].get(), p, SegmentCost::Part::kContinuity), nullptr,
+                              u->theta.data(), u->states[s].data(), u->states[s + 1].data());
+  return observations;
+}
+
+ceres::Solver::Options solverOptions(const OutputErrorOptions& options) {
+  ceres::Solver::Options solver;
+  solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  solver.max_num_iterations = options.max_iterations;
+  solver.num_threads = std::max(1, options.threads);
+  solver.function_tolerance = 1e-14;
+  solver.gradient_tolerance = 1e-16;
+  solver.parameter_tolerance = 1e-12;
+  // The projected line search Ceres runs on a bounded problem interpolates with function values
+  // only: its default (cubic) asks for the Jacobian at every trial point, here a simulation per
+  // column, nearly doubling the cost of an iteration.
+  solver.line_search_interpolation_type = ceres::QUADRATIC;
+  solver.logging_type = ceres::SILENT;
+  return solver;
+}
+
+/// The solve, with continuation when asked: soft continuity first, then the given weight (the
+/// cached residuals carry the weight: recomputed at each change). Returns the iterations.
+int solveWithContinuation(Problem* p, const OutputErrorOptions& options, double noise_std_prior_m,
+                          const std::function<double()>& elapsed_s, SegmentUnknowns* u,
+                          ceres::Problem* problem, ceres::Solver::Summary* summary) {
+  ceres::Solver::Options solver = solverOptions(options);
+  // The start-state fits spent part of the budget.
+  if (options.max_time_s > 0.0) solver.max_solver_time_in_seconds = std::max(1e-3, options.max_time_s - elapsed_s());
+  CancelCallback cancel(options.cancel);
+  if (options.cancel) solver.callbacks.push_back(&cancel);
+  int first_stage_iterations = 0;
+  const double hard_w_cont = p->w_cont;
+  if (options.first_continuity_weight > 0.0 && options.first_continuity_weight != options.continuity_weight) {
+    p->w_cont = options.first_continuity_weight / noise_std_prior_m;
+    for (auto& sim : u->sims) sim->invalidate();
+    ceres::Solve(solver, problem, summary);
+    first_stage_iterations = static_cast<int>(summary->iterations.size()) - 1;
+    p->w_cont = hard_w_cont;
+    for (auto& sim : u->sims) sim->invalidate();
+    if (options.max_time_s > 0.0)
+      solver.max_solver_time_in_seconds = std::max(1e-3, options.max_time_s - elapsed_s());
+  }
+  if (!(options.cancel && options.cancel->load())) ceres::Solve(solver, problem, summary);
+  return first_stage_iterations + static_cast<int>(summary->iterations.size()) - 1;
+}
+
+/// Fisher information of theta with the states eliminated (Schur complement):
+/// I = A - B C^-1 B^T from J^T J = [A B; B^T C], then Cov = I^+ (sigma_hat / sigma_prior)^2.
+/// Fills out->std_devs and out->unidentifiable (directions with a relative eigenvalue below
+/// 1e-10 of the unit-diagonal information are what the data do not determine).
+void estimateStd(const Problem& p, const ParameterSpace& space, const OutputErrorOptions& options,
+                 SegmentUnknowns* u, ceres::Problem* problem, OutputErrorResult* out) {
+  ceres::CRSMatrix crs;
+  ceres::Problem::EvaluateOptions eval;
+  eval.parameter_blocks.push_back(u->theta.data());
+  for (int s = 0; s < u->count(); ++s) eval.parameter_blocks.push_back(u->states[s].data());
+  if (!problem->Evaluate(eval, nullptr, nullptr, nullptr, &crs)) return;
+  const int np = static_cast<int>(u->theta.size());
+  Eigen::SparseMatrix<double> j(crs.num_rows, crs.num_cols);
+  std::vector<Eigen::Triplet<double>> entries;
+  for (int row = 0; row < crs.num_rows; ++row)
+    for (int e = crs.rows[row]; e < crs.rows[row + 1]; ++e) entries.emplace_back(row, crs.cols[e], crs.values[e]);
+  j.setFromTriplets(entries.begin(), entries.end());
+  const Eigen::SparseMatrix<double> jtj = Eigen::SparseMatrix<double>(j.transpose() * j);
+  const Eigen::MatrixXd a = Eigen::MatrixXd(jtj.topLeftCorner(np, np));
+  const Eigen::MatrixXd b = Eigen::MatrixXd(jtj.topRightCorner(np, crs.num_cols - np));
+  const Eigen::SparseMatrix<double> c = jtj.bottomRightCorner(crs.num_cols - np, crs.num_cols - np);
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(c);
+  Eigen::MatrixXd info = a;
+  if (ldlt.info() == Eigen::Success) info -= b * ldlt.solve(Eigen::MatrixXd(b.transpose()));
+  Eigen::VectorXd d = info.diagonal().cwiseMax(0.0).cwiseSqrt();
+  for (int k = 0; k < np; ++k) d[k] = d[k] > 0.0 ? 1.0 / d[k] : 0.0;
+  const Eigen::MatrixXd scaled = d.asDiagonal() * info * d.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled);
+  const Eigen::VectorXd lambda = eig.eigenvalues();
+  const double top = std::max(lambda.maxCoeff(), 1e-300);
+  Eigen::MatrixXd pinv = Eigen::MatrixXd::Zero(np, np);
+  Eigen::VectorXd null_loading = Eigen::VectorXd::Zero(np);
+  for (int q = 0; q < np; ++q) {
+    const Eigen::VectorXd v = eig.eigenvectors().col(q);
+    if (lambda[q] > 1e-10 * top) pinv += v * v.transpose() / lambda[q];
+    else null_loading += v.cwiseProduct(v);
+  }
+  const double scale2 = options.std_from_given_noise ? 1.0 : std::pow(out->noise_std_m / out->noise_std_prior_m, 2);
+  for (int k = 0; k < np; ++k) {
+    const size_t gene = static_cast<size_t>(p.smooth[k]);
+    const double gene_var = pinv(k, k) * d[k] * d[k] * scale2;
+    const double sd = std::abs(space.physicalSlope(gene, out->genes)) * std::sqrt(std::max(gene_var, 0.0));
+    if (null_loading[k] > 0.5 || !(d[k] > 0.0)) {
+      out->unidentifiable[gene] = 1;
+      continue;
+    }
+    out->std_devs[gene] = sd;
+    if (sd > std::abs(out->values[gene])) out->unidentifiable[gene] = 1;
+  }
+}
+
 /// One fit on the whole trajectory (the stages of OutputErrorOptions::grow_segments call it on
 /// its first frames).
 OutputErrorResult fitOnce(const Model& model, const Trajectory& trajectory,
                           const ParameterSpace& space, const std::vector<double>& start_genes,
                           const OutputErrorOptions& options) {
   const auto began = std::chrono::steady_clock::now();
+  const std::function<double()> elapsed_s = [&]() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+  };
   OutputErrorResult out;
   out.genes = start_genes;
   out.values = space.toPhysical(start_genes);
@@ -323,229 +548,39 @@ OutputErrorResult fitOnce(const Model& model, const Trajectory& trajectory,
     return out;
   }
   auto p = std::make_unique<Problem>();
-  p->obs = prepareObservations(model, trajectory);
-  const auto elapsed_s = [&]() {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
-  };
-  if (p->obs.frames < 3) {
-    out.reason = "fewer than 3 frames";
-    return out;
-  }
-  p->model = model;
-  p->model.frame_rate_hz = p->obs.frame_rate_hz;
-  p->refs = freeParameters(model);
-  p->space = &space;
-  p->base_genes = start_genes;
-  for (size_t k = 0; k < space.size(); ++k)
-    if (space.gene(k).smooth) p->smooth.push_back(static_cast<int>(k));
-  for (size_t i = 0; i < model.particles.size(); ++i)
-    if (!model.particles[i].fixed) p->free_particles.push_back(static_cast<int>(i));
-  if (p->smooth.empty() || p->free_particles.empty()) {
-    out.reason = "no smooth free parameter or no free particle";
-    return out;
-  }
-  p->h = p->obs.frame_period_s;
-  out.noise_std_prior_m =
-      options.noise_std_m > 0.0 ? options.noise_std_m : std::max(estimateMarkerNoise(trajectory), 1e-9);
-  p->w_obs = 1.0 / out.noise_std_prior_m;
-  p->w_cont = options.continuity_weight / out.noise_std_prior_m;
-
-  // Segments of K frames; the last one takes the remainder (at least 2 frames).
-  const int frames = p->obs.frames, K = options.segment_frames;
-  std::vector<std::pair<int, int>> segments;
-  for (int first = 0; first < frames - 1; first += K) {
-    int last = std::min(first + K, frames - 1);
-    if (frames - 1 - last < 2 && last < frames - 1) last = frames - 1;
-    segments.emplace_back(first, last);
-    if (last == frames - 1) break;
-  }
-  const int S = static_cast<int>(segments.size());
+  out.reason = setUpProblem(model, trajectory, space, start_genes, options, p.get(), &out);
+  if (!out.reason.empty()) return out;
+  SegmentUnknowns u;
+  u.segments = segmentsOf(p->obs.frames, options.segment_frames);
   const int ns = p->stateSize();
-  std::vector<double> theta(p->smooth.size());
-  for (size_t j = 0; j < p->smooth.size(); ++j) theta[j] = start_genes[p->smooth[j]];
-  std::vector<std::vector<double>> states(S, std::vector<double>(ns));
-  for (int s = 0; s < S; ++s) dataState(*p, segments[s].first, states[s].data());
+  u.theta.resize(p->smooth.size());
+  for (size_t j = 0; j < p->smooth.size(); ++j) u.theta[j] = start_genes[p->smooth[j]];
+  u.states.assign(u.count(), std::vector<double>(ns));
+  for (int s = 0; s < u.count(); ++s) dataState(*p, u.segments[s].first, u.states[s].data());
+  if (options.start_state_frames > 0) fitStartStates(p.get(), options, elapsed_s, &u);
 
-  if (options.start_state_frames > 0) {
-    // Per segment, the start state whose simulation (theta held) best matches the segment's
-    // first frames: a dense problem of one state, the same residuals as the observations'.
-    ceres::Solver::Options local;
-    local.linear_solver_type = ceres::DENSE_QR;
-    local.max_num_iterations = 20;
-    local.logging_type = ceres::SILENT;
-    for (int s = 0; s < S && !(options.cancel && options.cancel->load()); ++s) {
-      if (options.max_time_s > 0.0) {
-        if (elapsed_s() >= options.max_time_s) break;  // the rest keep the data's states
-        local.max_solver_time_in_seconds = options.max_time_s - elapsed_s();
-      }
-      const int first = segments[s].first;
-      SegmentSimulation sim(p.get(), first, std::min(first + options.start_state_frames, frames - 1),
-                            false, false);
-      if (sim.observedSamples() == 0) continue;
-      ceres::Problem::Options local_options;
-      local_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
-      ceres::Problem fit(local_options);
-      fit.AddResidualBlock(new SegmentCost(&sim, p.get(), SegmentCost::Part::kObservations),
-                           nullptr, theta.data(), states[s].data());
-      fit.SetParameterBlockConstant(theta.data());
-      const std::vector<double> from_data = states[s];
-      ceres::Solver::Summary fit_summary;
-      ceres::Solve(local, &fit, &fit_summary);
-      // Kept only when it matches the whole segment better: particles unseen in the first frames
-      // (occlusion) can make a fit of a few frames wrong for the rest.
-      SegmentSimulation whole(p.get(), first, segments[s].second, false, false);
-      const auto segmentCost = [&](const std::vector<double>& state) {
-        std::vector<double> r(3 * whole.observedSamples());
-        if (!whole.rows(theta.data(), state.data(), 0, static_cast<int>(r.size()), r.data(),
-                        nullptr, nullptr))
-          return std::numeric_limits<double>::infinity();
-        double sum = 0.0;
-        for (double v : r) sum += v * v;
-        return sum;
-      };
-      if (!fit_summary.IsSolutionUsable() || !(segmentCost(states[s]) < segmentCost(from_data)))
-        states[s] = from_data;
-    }
-  }
-  // The segments' simulations outlive the problem whose blocks read them.
-  std::vector<std::unique_ptr<SegmentSimulation>> sims;
-  for (int s = 0; s < S; ++s)
-    sims.push_back(std::make_unique<SegmentSimulation>(p.get(), segments[s].first,
-                                                       segments[s].second, s + 1 < S));
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
-  problem.AddParameterBlock(theta.data(), static_cast<int>(theta.size()));
-  for (size_t j = 0; j < p->smooth.size(); ++j) {
-    const Gene& g = space.gene(p->smooth[j]);
-    problem.SetParameterLowerBound(theta.data(), static_cast<int>(j), g.lower);
-    problem.SetParameterUpperBound(theta.data(), static_cast<int>(j), g.upper);
-  }
-  for (int s = 0; s < S; ++s) problem.AddParameterBlock(states[s].data(), ns);
-  // Every observation block first, then every continuity block: Ceres' threads take blocks in
-  // this order, so two threads simulate two segments rather than one waiting for the other's.
-  for (int s = 0; s < S; ++s) {
-    out.observations += 3 * sims[s]->observedSamples();
-    problem.AddResidualBlock(new SegmentCost(sims[s].get(), p.get(), SegmentCost::Part::kObservations),
-                             nullptr, theta.data(), states[s].data());
-  }
-  for (int s = 0; s + 1 < S; ++s)
-    problem.AddResidualBlock(new SegmentCost(sims[s].get(), p.get(), SegmentCost::Part::kContinuity),
-                             nullptr, theta.data(), states[s].data(), states[s + 1].data());
-  out.segments = S;
-  // The observation part of the cost, unweighted [m^2].
-  const auto observationCost = [&]() {
-    double sum = 0.0;
-    for (int s = 0; s < S; ++s) {
-      std::vector<double> r(3 * sims[s]->observedSamples());
-      if (!sims[s]->rows(theta.data(), states[s].data(), 0, static_cast<int>(r.size()), r.data(),
-                         nullptr, nullptr))
-        return std::numeric_limits<double>::infinity();
-      for (double v : r) sum += v * v;
-    }
-    return sum / (p->w_obs * p->w_obs);
-  };
-  out.start_cost_m2 = observationCost();
-
-  ceres::Solver::Options solver;
-  solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  solver.max_num_iterations = options.max_iterations;
-  solver.num_threads = std::max(1, options.threads);
-  solver.function_tolerance = 1e-14;
-  solver.gradient_tolerance = 1e-16;
-  solver.parameter_tolerance = 1e-12;
-  // The start-state fits spent part of the budget.
-  if (options.max_time_s > 0.0)
-    solver.max_solver_time_in_seconds = std::max(1e-3, options.max_time_s - elapsed_s());
-  // The projected line search Ceres runs on a bounded problem interpolates with function values
-  // only: its default (cubic) asks for the Jacobian at every trial point, here a simulation per
-  // column, nearly doubling the cost of an iteration.
-  solver.line_search_interpolation_type = ceres::QUADRATIC;
-  solver.logging_type = ceres::SILENT;
-  CancelCallback cancel(options.cancel);
-  if (options.cancel) solver.callbacks.push_back(&cancel);
+  out.observations = buildProblem(p.get(), space, &u, &problem);
+  out.segments = u.count();
+  out.start_cost_m2 = u.observationCost(*p);
   ceres::Solver::Summary summary;
-  int first_stage_iterations = 0;
-  const double hard_w_cont = p->w_cont;
-  if (options.first_continuity_weight > 0.0 &&
-      options.first_continuity_weight != options.continuity_weight) {
-    // Continuation: soft continuity first (the cached residuals carry the weight: recomputed).
-    p->w_cont = options.first_continuity_weight / out.noise_std_prior_m;
-    for (auto& sim : sims) sim->invalidate();
-    ceres::Solve(solver, &problem, &summary);
-    first_stage_iterations = static_cast<int>(summary.iterations.size()) - 1;
-    p->w_cont = hard_w_cont;
-    for (auto& sim : sims) sim->invalidate();
-    if (options.max_time_s > 0.0)
-      solver.max_solver_time_in_seconds = std::max(1e-3, options.max_time_s - elapsed_s());
-  }
-  if (!(options.cancel && options.cancel->load())) ceres::Solve(solver, &problem, &summary);
+  out.iterations = solveWithContinuation(p.get(), options, out.noise_std_prior_m, elapsed_s, &u, &problem, &summary);
   out.ran = true;
-  out.iterations = first_stage_iterations + static_cast<int>(summary.iterations.size()) - 1;
   out.converged = summary.termination_type == ceres::CONVERGENCE;
   out.termination = summary.message;
-  out.observation_cost_m2 = observationCost();
-  for (size_t j = 0; j < p->smooth.size(); ++j) out.genes[p->smooth[j]] = theta[j];
+  out.observation_cost_m2 = u.observationCost(*p);
+  for (size_t j = 0; j < p->smooth.size(); ++j) out.genes[p->smooth[j]] = u.theta[j];
   out.values = space.toPhysical(out.genes);
   // With nearly hard continuity the segment states are one trajectory's: its start state and
   // the parameters are what the observations determine.
-  const int unknowns = static_cast<int>(theta.size()) + ns;
+  const int unknowns = static_cast<int>(u.theta.size()) + ns;
   const int dof = std::max(1, out.observations - unknowns);
   out.noise_std_m = std::sqrt(out.observation_cost_m2 / dof);
-
-  if (options.estimate_std && !(options.cancel && options.cancel->load())) {
-    // Fisher information of theta with the states eliminated (Schur complement):
-    // I = A - B C^-1 B^T from J^T J = [A B; B^T C], then Cov = I^+ (sigma_hat / sigma_prior)^2.
-    ceres::CRSMatrix crs;
-    ceres::Problem::EvaluateOptions eval;
-    eval.parameter_blocks.push_back(theta.data());
-    for (int s = 0; s < S; ++s) eval.parameter_blocks.push_back(states[s].data());
-    if (problem.Evaluate(eval, nullptr, nullptr, nullptr, &crs)) {
-      const int np = static_cast<int>(theta.size());
-      Eigen::SparseMatrix<double> j(crs.num_rows, crs.num_cols);
-      std::vector<Eigen::Triplet<double>> entries;
-      for (int row = 0; row < crs.num_rows; ++row)
-        for (int e = crs.rows[row]; e < crs.rows[row + 1]; ++e)
-          entries.emplace_back(row, crs.cols[e], crs.values[e]);
-      j.setFromTriplets(entries.begin(), entries.end());
-      const Eigen::SparseMatrix<double> jtj = Eigen::SparseMatrix<double>(j.transpose() * j);
-      const Eigen::MatrixXd a = Eigen::MatrixXd(jtj.topLeftCorner(np, np));
-      const Eigen::MatrixXd b = Eigen::MatrixXd(jtj.topRightCorner(np, crs.num_cols - np));
-      const Eigen::SparseMatrix<double> c = jtj.bottomRightCorner(crs.num_cols - np, crs.num_cols - np);
-      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(c);
-      Eigen::MatrixXd info = a;
-      if (ldlt.info() == Eigen::Success) info -= b * ldlt.solve(Eigen::MatrixXd(b.transpose()));
-      // Scaled to unit diagonal; directions with a relative eigenvalue below 1e-10 are what the
-      // data do not determine.
-      Eigen::VectorXd d = info.diagonal().cwiseMax(0.0).cwiseSqrt();
-      for (int k = 0; k < np; ++k) d[k] = d[k] > 0.0 ? 1.0 / d[k] : 0.0;
-      const Eigen::MatrixXd scaled = d.asDiagonal() * info * d.asDiagonal();
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled);
-      const Eigen::VectorXd lambda = eig.eigenvalues();
-      const double top = std::max(lambda.maxCoeff(), 1e-300);
-      Eigen::MatrixXd pinv = Eigen::MatrixXd::Zero(np, np);
-      Eigen::VectorXd null_loading = Eigen::VectorXd::Zero(np);
-      for (int q = 0; q < np; ++q) {
-        const Eigen::VectorXd v = eig.eigenvectors().col(q);
-        if (lambda[q] > 1e-10 * top) pinv += v * v.transpose() / lambda[q];
-        else null_loading += v.cwiseProduct(v);
-      }
-      const double scale2 =
-          options.std_from_given_noise ? 1.0 : std::pow(out.noise_std_m / out.noise_std_prior_m, 2);
-      for (int k = 0; k < np; ++k) {
-        const size_t gene = static_cast<size_t>(p->smooth[k]);
-        const double gene_var = pinv(k, k) * d[k] * d[k] * scale2;
-        const double sd = std::abs(space.physicalSlope(gene, out.genes)) * std::sqrt(std::max(gene_var, 0.0));
-        if (null_loading[k] > 0.5 || !(d[k] > 0.0)) {
-          out.unidentifiable[gene] = 1;
-          continue;
-        }
-        out.std_devs[gene] = sd;
-        if (sd > std::abs(out.values[gene])) out.unidentifiable[gene] = 1;
-      }
-    }
-  }
-  out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+  if (options.estimate_std && !(options.cancel && options.cancel->load()))
+    estimateStd(*p, space, options, &u, &problem, &out);
+  out.wall_time_s = elapsed_s();
   return out;
 }
 
