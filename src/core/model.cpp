@@ -103,11 +103,20 @@ void setValues(Model& model, const std::vector<ParamRef>& refs, const std::vecto
   for (size_t i = 0; i < refs.size() && i < values.size(); ++i) setParam(model, refs[i], values[i]);
 }
 
-std::string validateModel(const Model& model) {
-  std::ostringstream err;
+namespace {
+
+// validateModel's steps, one per part of the model, in the order the model is checked. Each
+// returns the first problem found ("" when none).
+
+std::string checkSettings(const Model& model) {
   if (model.substeps < 1) return "substeps must be >= 1";
   if (!(model.frame_rate_hz >= 0.0) || !std::isfinite(model.frame_rate_hz))
     return "frame_rate_hz must be >= 0";
+  return "";
+}
+
+std::string checkParticles(const Model& model) {
+  std::ostringstream err;
   const int n = static_cast<int>(model.particles.size());
   for (int i = 0; i < n; ++i) {
     const Particle& p = model.particles[i];
@@ -122,6 +131,13 @@ std::string validateModel(const Model& model) {
     for (int j = 0; j < i; ++j)
       if (model.particles[j].name == p.name) return "duplicate particle name '" + p.name + "'";
   }
+  return "";
+}
+
+/// Each bond's type and particles (indices in range, no particle joined to itself).
+std::string checkBondParticles(const Model& model) {
+  std::ostringstream err;
+  const int n = static_cast<int>(model.particles.size());
   for (size_t b = 0; b < model.bonds.size(); ++b) {
     const Bond& bond = model.bonds[b];
     if (bond.type < 0 || bond.type >= static_cast<int>(model.bond_types.size())) {
@@ -142,6 +158,34 @@ std::string validateModel(const Model& model) {
         }
     }
   }
+  return "";
+}
+
+/// A muscle bond's inputs: as many as its network reads, each another named bond with an
+/// elongation.
+std::string checkMuscleInputs(const Model& model, size_t b, const std::string& bond_name) {
+  const Bond& bond = model.bonds[b];
+  const BondType& type = model.bond_types[bond.type];
+  if (static_cast<int>(bond.inputs.size()) != type.network_inputs)
+    return bond_name + ": muscle type '" + type.name + "' reads " +
+           std::to_string(type.network_inputs) + " input bond(s), the bond names " +
+           std::to_string(bond.inputs.size());
+  for (int in : bond.inputs) {
+    if (in < 0 || in >= static_cast<int>(model.bonds.size()))
+      return bond_name + ": input bond index out of range";
+    if (in == static_cast<int>(b)) return bond_name + ": a muscle cannot read its own bond";
+    const BondType& in_type = model.bond_types[model.bonds[in].type];
+    if (!bondKindInfo(in_type.kind).has_elongation)
+      return bond_name + ": input bond " + std::to_string(in) + " is a " +
+             kindName(in_type.kind) + " (inputs must be springs or muscles: bonds with an elongation)";
+    if (model.bonds[in].name.empty())
+      return bond_name + ": input bond " + std::to_string(in) + " has no name";
+  }
+  return "";
+}
+
+/// Bond names unique; only muscles have inputs, and theirs are consistent.
+std::string checkBondNamesAndInputs(const Model& model) {
   for (size_t b = 0; b < model.bonds.size(); ++b) {
     const Bond& bond = model.bonds[b];
     const std::string bond_name =
@@ -156,22 +200,13 @@ std::string validateModel(const Model& model) {
                kindName(type.kind) + ")";
       continue;
     }
-    if (static_cast<int>(bond.inputs.size()) != type.network_inputs)
-      return bond_name + ": muscle type '" + type.name + "' reads " +
-             std::to_string(type.network_inputs) + " input bond(s), the bond names " +
-             std::to_string(bond.inputs.size());
-    for (int in : bond.inputs) {
-      if (in < 0 || in >= static_cast<int>(model.bonds.size()))
-        return bond_name + ": input bond index out of range";
-      if (in == static_cast<int>(b)) return bond_name + ": a muscle cannot read its own bond";
-      const BondType& in_type = model.bond_types[model.bonds[in].type];
-      if (!bondKindInfo(in_type.kind).has_elongation)
-        return bond_name + ": input bond " + std::to_string(in) + " is a " +
-               kindName(in_type.kind) + " (inputs must be springs or muscles: bonds with an elongation)";
-      if (model.bonds[in].name.empty())
-        return bond_name + ": input bond " + std::to_string(in) + " has no name";
-    }
+    const std::string reason = checkMuscleInputs(model, b, bond_name);
+    if (!reason.empty()) return reason;
   }
+  return "";
+}
+
+std::string checkInteractions(const Model& model) {
   for (size_t t = 0; t < model.interactions.size(); ++t) {
     const Interaction& in = model.interactions[t];
     if (in.type < 0 || in.type >= static_cast<int>(model.bond_types.size()))
@@ -182,49 +217,73 @@ std::string validateModel(const Model& model) {
     if (!type.param(kMaxDistance).present)
       return "interaction type '" + type.name + "' needs max_distance";
   }
+  return "";
+}
+
+/// One present parameter `key` of `type`: finite value, min <= max, a value when fixed.
+std::string checkParam(const BondType& type, const Param& p, const std::string& key) {
+  if (!p.present) return "";
+  if (p.has_value && !std::isfinite(p.value))
+    return "bond type '" + type.name + "': " + key + " must be finite";
+  if (p.has_min && p.has_max && p.min > p.max)
+    return "bond type '" + type.name + "': " + key + " has min > max";
+  if (!p.free && !p.has_value)
+    return "bond type '" + type.name + "': " + key + " is fixed but has no value";
+  return "";
+}
+
+/// A muscle type's network: layout in range, as many weights as it needs, each valid.
+std::string checkNetwork(const BondType& type) {
+  if (type.network_inputs < 0 || type.network_inputs > kMaxMuscleInputs)
+    return "bond type '" + type.name + "': inputs must be in [0, " +
+           std::to_string(kMaxMuscleInputs) + "]";
+  if (type.network_hidden < 0 || type.network_hidden > kMaxMuscleHidden)
+    return "bond type '" + type.name + "': hidden must be in [0, " +
+           std::to_string(kMaxMuscleHidden) + "]";
+  if (static_cast<int>(type.network.size()) !=
+      muscleNetworkSize(type.network_inputs, type.network_hidden))
+    return "bond type '" + type.name + "': the network has " +
+           std::to_string(type.network.size()) + " parameters, its layout needs " +
+           std::to_string(muscleNetworkSize(type.network_inputs, type.network_hidden));
+  for (size_t k = 0; k < type.network.size(); ++k) {
+    const std::string reason = checkParam(
+        type, type.network[k],
+        muscleNetworkKey(type.network_inputs, type.network_hidden, static_cast<int>(k)));
+    if (!reason.empty()) return reason;
+  }
+  return "";
+}
+
+std::string checkBondType(const BondType& type) {
+  for (ParamId id : paramsOfKind(type.kind)) {
+    const std::string reason = checkParam(type, type.params[id], paramKey(id));
+    if (!reason.empty()) return reason;
+  }
+  const Param& depth = type.params[kContactDepth];
+  if (depth.present && depth.has_value && depth.value < 0.0)
+    return "bond type '" + type.name + "': contact_depth must be >= 0 [m] (0: none)";
+  const Param& tau = type.params[kActivationTime];
+  if (tau.present && tau.has_value && tau.value < 0.0)
+    return "bond type '" + type.name + "': activation_time_constant must be >= 0 [s] (0: none)";
+  if (!bondKindInfo(type.kind).network) {
+    if (!type.network.empty() || type.network_inputs != 0 || type.network_hidden != 0)
+      return "bond type '" + type.name + "': only muscles have a network";
+    return "";
+  }
+  return checkNetwork(type);
+}
+
+}  // namespace
+
+std::string validateModel(const Model& model) {
+  for (auto check : {checkSettings, checkParticles, checkBondParticles, checkBondNamesAndInputs,
+                     checkInteractions}) {
+    const std::string reason = check(model);
+    if (!reason.empty()) return reason;
+  }
   for (const BondType& type : model.bond_types) {
-    const auto check = [&type](const Param& p, const std::string& key) -> std::string {
-      if (!p.present) return "";
-      if (p.has_value && !std::isfinite(p.value))
-        return "bond type '" + type.name + "': " + key + " must be finite";
-      if (p.has_min && p.has_max && p.min > p.max)
-        return "bond type '" + type.name + "': " + key + " has min > max";
-      if (!p.free && !p.has_value)
-        return "bond type '" + type.name + "': " + key + " is fixed but has no value";
-      return "";
-    };
-    for (ParamId id : paramsOfKind(type.kind)) {
-      const std::string reason = check(type.params[id], paramKey(id));
-      if (!reason.empty()) return reason;
-    }
-    const Param& depth = type.params[kContactDepth];
-    if (depth.present && depth.has_value && depth.value < 0.0)
-      return "bond type '" + type.name + "': contact_depth must be >= 0 [m] (0: none)";
-    const Param& tau = type.params[kActivationTime];
-    if (tau.present && tau.has_value && tau.value < 0.0)
-      return "bond type '" + type.name + "': activation_time_constant must be >= 0 [s] (0: none)";
-    if (!bondKindInfo(type.kind).network) {
-      if (!type.network.empty() || type.network_inputs != 0 || type.network_hidden != 0)
-        return "bond type '" + type.name + "': only muscles have a network";
-      continue;
-    }
-    if (type.network_inputs < 0 || type.network_inputs > kMaxMuscleInputs)
-      return "bond type '" + type.name + "': inputs must be in [0, " +
-             std::to_string(kMaxMuscleInputs) + "]";
-    if (type.network_hidden < 0 || type.network_hidden > kMaxMuscleHidden)
-      return "bond type '" + type.name + "': hidden must be in [0, " +
-             std::to_string(kMaxMuscleHidden) + "]";
-    if (static_cast<int>(type.network.size()) !=
-        muscleNetworkSize(type.network_inputs, type.network_hidden))
-      return "bond type '" + type.name + "': the network has " +
-             std::to_string(type.network.size()) + " parameters, its layout needs " +
-             std::to_string(muscleNetworkSize(type.network_inputs, type.network_hidden));
-    for (size_t k = 0; k < type.network.size(); ++k) {
-      const std::string reason = check(
-          type.network[k],
-          muscleNetworkKey(type.network_inputs, type.network_hidden, static_cast<int>(k)));
-      if (!reason.empty()) return reason;
-    }
+    const std::string reason = checkBondType(type);
+    if (!reason.empty()) return reason;
   }
   return "";
 }

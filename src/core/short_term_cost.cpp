@@ -154,6 +154,137 @@ std::vector<std::vector<uint32_t>> parameterReach(
   return params_of;
 }
 
+/// The model's structure as the frames' bookkeeping needs it: which particles a missing one
+/// affects, and which particles each interaction may join. Computed once per cost.
+struct Structure {
+  /// Bond graph (adjacency lists): a force reaches one bond further per substep.
+  std::vector<std::vector<int>> adjacent;
+  /// Members of each group that takes part in an interaction.
+  std::map<std::string, std::vector<int>> group_members;
+  /// Per interaction, per particle: in its group a / group b.
+  std::vector<std::vector<uint8_t>> in_a, in_b;
+};
+
+/// Bond graph for the "within substeps hops" rule.
+std::vector<std::vector<int>> bondGraph(const Model& model, int n) {
+  std::vector<std::vector<int>> adj_lists(n);
+  for (const Bond& b : model.bonds) {
+    const int arity = kindArity(model.bond_types[b.type].kind);
+    for (int p = 0; p < arity; ++p)
+      for (int q = 0; q < arity; ++q)
+        if (p != q) adj_lists[b.particles[p]].push_back(b.particles[q]);
+    // A muscle's force depends on its input bonds' ends: one hop from them to its own ends.
+    for (int in : b.inputs)
+      for (int p = 0; p < kindArity(model.bond_types[model.bonds[in].type].kind); ++p)
+        for (int q = 0; q < arity; ++q) adj_lists[model.bonds[in].particles[p]].push_back(b.particles[q]);
+  }
+  return adj_lists;
+}
+
+Structure modelStructure(const Model& model, int n) {
+  Structure s;
+  s.adjacent = bondGraph(model, n);
+  // Groups involved in interactions, and for each such group its members.
+  for (const Interaction& in : model.interactions) {
+    s.group_members[in.group_a];
+    s.group_members[in.group_b];
+  }
+  for (int i = 0; i < n; ++i) {
+    auto it = s.group_members.find(model.particles[i].group);
+    if (it != s.group_members.end()) it->second.push_back(i);
+  }
+  for (const Interaction& in : model.interactions) {
+    s.in_a.emplace_back(n, 0);
+    s.in_b.emplace_back(n, 0);
+    for (int i = 0; i < n; ++i) {
+      s.in_a.back()[i] = model.particles[i].group == in.group_a;
+      s.in_b.back()[i] = model.particles[i].group == in.group_b;
+    }
+  }
+  return s;
+}
+
+/// Candidate search radius of an interaction: a fixed max_distance is exact; a free one uses
+/// its upper bound, or twice its initial value when unbounded (documented cap, see
+/// prepareLaws).
+double interactionCutoff(const BondType& type) {
+  const Param& p = type.param(kMaxDistance);
+  double cutoff = p.value;
+  if (p.free) {
+    if (p.has_max && std::isfinite(p.max)) {
+      cutoff = p.max;
+    } else if (p.has_value && p.value > 0.0) {
+      cutoff = 2.0 * p.value;
+    } else {
+      throw InputError("bond type '" + type.name +
+                       "': a free max_distance of an interaction needs a max bound or a "
+                       "positive initial value");
+    }
+  }
+  return cutoff;
+}
+
+/// Reused from frame to frame while the constructor lists the frames' work.
+struct FrameScratch {
+  std::vector<uint8_t> dropped;  // 1: term dropped (missing or reached), 2: group drop
+  std::vector<int> frontier, next;
+  SpatialGrid grid;
+  std::vector<Eigen::Vector3d> frame_points;
+  std::vector<std::pair<int, int>> found;
+};
+
+/// Free particles lacking x(t) or x(t-1), spread `substeps` hops over the bond graph (a force
+/// reaches one bond further per substep), into scratch->dropped. A fixed one is where it always
+/// is, seen or not (an anchor without a marker: the model's position, see
+/// prepareObservations).
+void markDropped(const Model& model, const Trajectory& trajectory, int n, int t, int tp,
+                 int substeps, Structure& structure, FrameScratch* scratch) {
+  std::vector<uint8_t>& dropped = scratch->dropped;
+  std::vector<int>& frontier = scratch->frontier;
+  std::fill(dropped.begin(), dropped.end(), 0);
+  frontier.clear();
+  for (int i = 0; i < n; ++i)
+    if (!model.particles[i].fixed && (trajectory.isOccluded(t, i) || trajectory.isOccluded(tp, i))) {
+      dropped[i] = 1;
+      frontier.push_back(i);
+    }
+  // Interaction groups: a missing member makes every partner group's neighbourhood unknown.
+  for (const Interaction& in : model.interactions) {
+    bool miss_a = false, miss_b = false;
+    // == 1: only particles actually missing (2 marks group drops of earlier interactions).
+    for (int i : structure.group_members[in.group_a]) miss_a = miss_a || dropped[i] == 1;
+    for (int i : structure.group_members[in.group_b]) miss_b = miss_b || dropped[i] == 1;
+    std::vector<int>& drop_b = structure.group_members[in.group_b];
+    std::vector<int>& drop_a = structure.group_members[in.group_a];
+    if (miss_a)
+      for (int i : drop_b) dropped[i] = dropped[i] ? dropped[i] : 2;
+    if (miss_b)
+      for (int i : drop_a) dropped[i] = dropped[i] ? dropped[i] : 2;
+  }
+  for (int hop = 0; hop < substeps && !frontier.empty(); ++hop) {
+    scratch->next.clear();
+    for (int i : frontier)
+      for (int j : structure.adjacent[i])
+        if (dropped[j] != 1) {
+          dropped[j] = 1;
+          scratch->next.push_back(j);
+        }
+    frontier.swap(scratch->next);
+  }
+}
+
+/// Margin for pairs that close in during the frame: with substeps the simulator re-finds
+/// neighbours every substep, so pairs that come within max_distance during the frame must
+/// already be candidates. Twice the fastest start speed over the frame (0 without substeps).
+double closingMargin(const double* v, int n, int substeps, double frame_period_s) {
+  if (substeps <= 1) return 0.0;
+  double vmax2 = 0.0;
+  for (int i = 0; i < n; ++i)
+    vmax2 = std::max(vmax2, v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1] +
+                                v[3 * i + 2] * v[3 * i + 2]);
+  return 2.0 * std::sqrt(vmax2) * frame_period_s;
+}
+
 }  // namespace
 
 struct ShortTermCost::Impl {
@@ -166,6 +297,7 @@ struct ShortTermCost::Impl {
   std::vector<ParamRef> free_refs;
   std::vector<int> inter_type;          // bond type of each interaction
   std::vector<double> inter_cutoff_m;   // candidate search radius of each interaction
+  std::vector<uint8_t> inter_fixed_cutoff;  // 1 when the interaction's max_distance is fixed
   std::vector<double> pos;              // T x 3N filled observed positions
   std::vector<double> vel;              // frames x 3N start velocities
   std::vector<int32_t> valid;
@@ -176,6 +308,29 @@ struct ShortTermCost::Impl {
   std::vector<std::vector<uint32_t>> params_of_particle;  // free parameters reaching each particle
   uint64_t bond_evals = 0;
   uint64_t terms = 0;
+
+  // Construction steps (defined below the struct).
+
+  /// Everything that depends on the model alone: step sizes, laws, free parameters and the
+  /// interactions' candidate radii.
+  void setUp(const Model& model, int particles, double rate_hz);
+  /// Lists frame t's work (t-1 -> t: start, t+1: target) when it has a valid term.
+  void addFrame(const Model& model, const Trajectory& trajectory, int t, bool static_mode,
+                Structure& structure, FrameScratch* scratch);
+  /// Appends v(t) to vel: (x(t) - x(t-1))/h for a free particle seen at both; a fixed one
+  /// keeps the model's velocity; otherwise at rest.
+  void addStartVelocities(const Model& model, const Trajectory& trajectory, int t, int tp,
+                          bool static_mode);
+  /// Frame w's interaction candidates (pairs of the interaction's groups within its search
+  /// radius at x(t), by ascending length) into inter_pairs / inter_d0 / inter_runs; the
+  /// closing margin into *margin_m. Returns the number of candidates.
+  uint64_t addCandidates(const WorkFrame& w, const Structure& structure, FrameScratch* scratch,
+                         double* margin_m);
+  /// One interaction's candidates of a frame as a run sorted by length; returns their count.
+  uint64_t addRun(int32_t interaction, const std::vector<std::pair<int, int>>& found,
+                  const std::vector<Eigen::Vector3d>& frame_points);
+
+  // ----------------------------------------------------------------------------- evaluation
 
   void prepareLaws(const std::vector<double>& values, Workspace* ws) const {
     if (values.size() != free_refs.size()) {
@@ -276,6 +431,138 @@ struct ShortTermCost::Impl {
   }
 };
 
+// ------------------------------------------------------------------------------------------
+// Construction: what does not depend on parameter values, computed once
+// ------------------------------------------------------------------------------------------
+
+/// Everything that depends on the model alone: step sizes, laws, free parameters and the
+/// interactions' candidate radii.
+void ShortTermCost::Impl::setUp(const Model& model, int particles, double rate_hz) {
+  n = particles;
+  substeps = model.substeps;
+  frame_period_s = 1.0 / rate_hz;
+  dt_s = frame_period_s / model.substeps;
+  engine = detail::Engine(model);
+  base_laws.load(model);
+  free_refs = mme::freeParameters(model);
+  for (const Interaction& in : model.interactions) {
+    const BondType& type = model.bond_types[in.type];
+    inter_type.push_back(in.type);
+    inter_cutoff_m.push_back(interactionCutoff(type));
+    inter_fixed_cutoff.push_back(!type.param(kMaxDistance).free);
+  }
+}
+
+/// Lists frame t's work (t-1 -> t: start, t+1: target) when it has a valid term.
+void ShortTermCost::Impl::addFrame(const Model& model, const Trajectory& trajectory, int t,
+                                   bool static_mode, Structure& structure,
+                                   FrameScratch* scratch) {
+  const int tp = static_mode ? 0 : t - 1, tn = static_mode ? 0 : t + 1;
+  markDropped(model, trajectory, n, t, tp, substeps, structure, scratch);
+  WorkFrame w{};
+  w.valid_begin = static_cast<uint32_t>(valid.size());
+  for (int i = 0; i < n; ++i)
+    if (!scratch->dropped[i] && !trajectory.isOccluded(tn, i)) valid.push_back(i);
+  w.valid_end = static_cast<uint32_t>(valid.size());
+  if (w.valid_end == w.valid_begin) return;  // nothing to compare: skip the frame's work
+
+  const size_t n3 = 3 * static_cast<size_t>(n);
+  w.x_off = static_cast<size_t>(t) * n3;
+  w.target_off = static_cast<size_t>(tn) * n3;
+  w.v_off = vel.size();
+  addStartVelocities(model, trajectory, t, tp, static_mode);
+  w.run_begin = static_cast<uint32_t>(inter_runs.size());
+  double margin_all_m = 0.0;
+  const uint64_t candidates =
+      model.interactions.empty() ? 0 : addCandidates(w, structure, scratch, &margin_all_m);
+  w.run_end = static_cast<uint32_t>(inter_runs.size());
+  w.margin_m = substeps > 1 ? margin_all_m : 0.0;
+  w.fixed_evals = static_cast<uint64_t>(substeps) *
+                  (engine.numSprings() + engine.numFlexions() + engine.numMuscles());
+  w.bond_evals = w.fixed_evals + static_cast<uint64_t>(substeps) * candidates;
+  bond_evals += w.bond_evals;
+  terms += w.valid_end - w.valid_begin;
+  frames.push_back(w);
+}
+
+/// Appends v(t) to vel: (x(t) - x(t-1))/h for a free particle seen at both; a fixed one
+/// keeps the model's velocity; otherwise at rest.
+void ShortTermCost::Impl::addStartVelocities(const Model& model, const Trajectory& trajectory,
+                                             int t, int tp, bool static_mode) {
+  const size_t n3 = 3 * static_cast<size_t>(n);
+  const size_t v_off = vel.size();
+  vel.resize(vel.size() + n3, 0.0);
+  double* v = vel.data() + v_off;
+  const double* xt = pos.data() + t * n3;
+  const double* xp = pos.data() + tp * n3;
+  for (int i = 0; i < n; ++i) {
+    const Particle& p = model.particles[i];
+    for (int k = 0; k < 3; ++k) {
+      double vk = 0.0;  // unknown or static: at rest
+      if (p.fixed) {
+        vk = p.velocity_mps[k];  // what the simulator keeps for a fixed particle
+      } else if (!static_mode && !trajectory.isOccluded(t, i) && !trajectory.isOccluded(tp, i)) {
+        vk = (xt[3 * i + k] - xp[3 * i + k]) / frame_period_s;
+      }
+      v[3 * i + k] = vk;
+    }
+  }
+}
+
+/// Frame w's interaction candidates (pairs of the interaction's groups within its search
+/// radius at x(t), by ascending length) into inter_pairs / inter_d0 / inter_runs; the
+/// closing margin into *margin_m. Returns the number of candidates.
+uint64_t ShortTermCost::Impl::addCandidates(const WorkFrame& w, const Structure& structure,
+                                            FrameScratch* scratch, double* margin_m) {
+  const double* xt = pos.data() + w.x_off;
+  // A fixed max_distance gets the closing margin (a free one is searched up to its upper
+  // bound, which already leaves room).
+  *margin_m = closingMargin(vel.data() + w.v_off, n, substeps, frame_period_s);
+  double frame_cell_m = 0.0;
+  std::vector<double> radius_m(inter_type.size(), 0.0);
+  for (size_t k = 0; k < inter_type.size(); ++k) {
+    const double c = inter_cutoff_m[k];
+    if (!(c > 0.0) || !std::isfinite(c)) continue;
+    radius_m[k] = c + (inter_fixed_cutoff[k] ? *margin_m : 0.0);
+    frame_cell_m = std::max(frame_cell_m, radius_m[k]);
+  }
+  std::vector<Eigen::Vector3d>& frame_points = scratch->frame_points;
+  for (int i = 0; i < n; ++i)
+    frame_points[i] = Eigen::Vector3d(xt[3 * i], xt[3 * i + 1], xt[3 * i + 2]);
+  if (frame_cell_m > 0.0) scratch->grid.build(frame_points, frame_cell_m);
+  uint64_t candidates = 0;
+  for (size_t k = 0; k < inter_type.size(); ++k) {
+    const double cutoff = radius_m[k];
+    if (!(cutoff > 0.0)) continue;
+    scratch->found.clear();
+    scratch->grid.pairsWithin(frame_points, cutoff, structure.in_a[k], structure.in_b[k],
+                              &scratch->found);
+    if (scratch->found.empty()) continue;
+    candidates += addRun(static_cast<int32_t>(k), scratch->found, frame_points);
+  }
+  return candidates;
+}
+
+/// One interaction's candidates of a frame as a run sorted by length; returns their count.
+uint64_t ShortTermCost::Impl::addRun(int32_t interaction,
+                                     const std::vector<std::pair<int, int>>& found,
+                                     const std::vector<Eigen::Vector3d>& frame_points) {
+  detail::SpringRun run{interaction, static_cast<uint32_t>(inter_pairs.size()), 0};
+  std::vector<std::pair<double, std::pair<int, int>>> by_length;
+  by_length.reserve(found.size());
+  for (const auto& p : found)
+    by_length.push_back({(frame_points[p.first] - frame_points[p.second]).norm(), p});
+  std::stable_sort(by_length.begin(), by_length.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& e : by_length) {
+    inter_pairs.push_back({e.second.first, e.second.second});
+    inter_d0.push_back(e.first);
+  }
+  run.end = static_cast<uint32_t>(inter_pairs.size());
+  inter_runs.push_back(run);
+  return run.end - run.begin;
+}
+
 ShortTermCost::ShortTermCost(const Model& model, const Trajectory& trajectory)
     : impl_(new Impl) {
   Impl& m = *impl_;
@@ -284,203 +571,18 @@ ShortTermCost::ShortTermCost(const Model& model, const Trajectory& trajectory)
   const int n = obs.particles;
   const int num_frames = obs.frames;
   const bool static_mode = num_frames == 1;
-  const double rate_hz = obs.frame_rate_hz;
-
-  m.n = n;
-  m.substeps = model.substeps;
-  m.frame_period_s = 1.0 / rate_hz;
-  m.dt_s = m.frame_period_s / model.substeps;
-  m.engine = detail::Engine(model);
-  m.base_laws.load(model);
-  m.free_refs = mme::freeParameters(model);
-
-  // Interaction candidate radii: a fixed max_distance is exact; a free one uses its upper
-  // bound, or twice its initial value when unbounded (documented cap, see prepareLaws).
-  std::vector<uint8_t> inter_fixed_cutoff;
-  for (const Interaction& in : model.interactions) {
-    const BondType& type = model.bond_types[in.type];
-    const Param& p = type.param(kMaxDistance);
-    double cutoff = p.value;
-    if (p.free) {
-      if (p.has_max && std::isfinite(p.max)) {
-        cutoff = p.max;
-      } else if (p.has_value && p.value > 0.0) {
-        cutoff = 2.0 * p.value;
-      } else {
-        throw InputError("bond type '" + type.name +
-                         "': a free max_distance of an interaction needs a max bound or a "
-                         "positive initial value");
-      }
-    }
-    m.inter_type.push_back(in.type);
-    m.inter_cutoff_m.push_back(cutoff);
-    inter_fixed_cutoff.push_back(!p.free);
-  }
-
-  const size_t n3 = 3 * static_cast<size_t>(n);
+  m.setUp(model, n, obs.frame_rate_hz);
   m.pos = std::move(obs.positions_m);
 
-  // Bond graph for the "within substeps hops" rule (CSR adjacency).
-  std::vector<std::vector<int>> adj_lists(n);
-  for (const Bond& b : model.bonds) {
-    const int arity = kindArity(model.bond_types[b.type].kind);
-    for (int p = 0; p < arity; ++p)
-      for (int q = 0; q < arity; ++q)
-        if (p != q) adj_lists[b.particles[p]].push_back(b.particles[q]);
-    // A muscle's force depends on its input bonds' ends: one hop from them to its own ends.
-    for (int in : b.inputs)
-      for (int p = 0; p < kindArity(model.bond_types[model.bonds[in].type].kind); ++p)
-        for (int q = 0; q < arity; ++q) adj_lists[model.bonds[in].particles[p]].push_back(b.particles[q]);
-  }
-  // Groups involved in interactions, and for each such group its partner groups.
-  std::map<std::string, std::vector<int>> group_members;
-  for (const Interaction& in : model.interactions) {
-    group_members[in.group_a];
-    group_members[in.group_b];
-  }
-  for (int i = 0; i < n; ++i) {
-    auto it = group_members.find(model.particles[i].group);
-    if (it != group_members.end()) it->second.push_back(i);
-  }
-  m.params_of_particle = parameterReach(model, adj_lists, group_members, m.free_refs);
-
-  SpatialGrid grid;
-  std::vector<std::vector<uint8_t>> in_a, in_b;
-  for (const Interaction& in : model.interactions) {
-    in_a.emplace_back(n, 0);
-    in_b.emplace_back(n, 0);
-    for (int i = 0; i < n; ++i) {
-      in_a.back()[i] = model.particles[i].group == in.group_a;
-      in_b.back()[i] = model.particles[i].group == in.group_b;
-    }
-  }
-  std::vector<Eigen::Vector3d> frame_points(n);
-  std::vector<std::pair<int, int>> found;
-
-  std::vector<uint8_t> dropped(n), frontier_mark(n);
-  std::vector<int> frontier, next;
+  Structure structure = modelStructure(model, n);
+  m.params_of_particle = parameterReach(model, structure.adjacent, structure.group_members, m.free_refs);
+  FrameScratch scratch;
+  scratch.dropped.resize(n);
+  scratch.frame_points.resize(n);
   const int t_first = static_mode ? 0 : 1;
   const int t_last = static_mode ? 0 : num_frames - 2;  // inclusive
-  for (int t = t_first; t <= t_last; ++t) {
-    const int tp = static_mode ? 0 : t - 1, tn = static_mode ? 0 : t + 1;
-    // Free particles lacking x(t) or x(t-1), spread `substeps` hops over the bond graph: a
-    // force reaches one bond further per substep. A fixed one is where it always is, seen or
-    // not (an anchor without a marker: the model's position, see prepareObservations).
-    std::fill(dropped.begin(), dropped.end(), 0);
-    frontier.clear();
-    for (int i = 0; i < n; ++i)
-      if (!model.particles[i].fixed && (trajectory.isOccluded(t, i) || trajectory.isOccluded(tp, i))) {
-        dropped[i] = 1;
-        frontier.push_back(i);
-      }
-    // Interaction groups: a missing member makes every partner group's neighbourhood unknown.
-    for (const Interaction& in : model.interactions) {
-      bool miss_a = false, miss_b = false;
-      // == 1: only particles actually missing (2 marks group drops of earlier interactions).
-      for (int i : group_members[in.group_a]) miss_a = miss_a || dropped[i] == 1;
-      for (int i : group_members[in.group_b]) miss_b = miss_b || dropped[i] == 1;
-      std::vector<int>& drop_b = group_members[in.group_b];
-      std::vector<int>& drop_a = group_members[in.group_a];
-      if (miss_a)
-        for (int i : drop_b) dropped[i] = dropped[i] ? dropped[i] : 2;
-      if (miss_b)
-        for (int i : drop_a) dropped[i] = dropped[i] ? dropped[i] : 2;
-    }
-    for (int hop = 0; hop < m.substeps && !frontier.empty(); ++hop) {
-      next.clear();
-      for (int i : frontier)
-        for (int j : adj_lists[i])
-          if (dropped[j] != 1) {
-            dropped[j] = 1;
-            next.push_back(j);
-          }
-      frontier.swap(next);
-    }
-    WorkFrame w{};
-    w.valid_begin = static_cast<uint32_t>(m.valid.size());
-    for (int i = 0; i < n; ++i)
-      if (!dropped[i] && !trajectory.isOccluded(tn, i)) m.valid.push_back(i);
-    w.valid_end = static_cast<uint32_t>(m.valid.size());
-    if (w.valid_end == w.valid_begin) continue;  // nothing to compare: skip the frame's work
-
-    w.x_off = static_cast<size_t>(t) * n3;
-    w.target_off = static_cast<size_t>(tn) * n3;
-    w.v_off = m.vel.size();
-    m.vel.resize(m.vel.size() + n3, 0.0);
-    double* v = m.vel.data() + w.v_off;
-    const double* xt = m.pos.data() + t * n3;
-    const double* xp = m.pos.data() + tp * n3;
-    for (int i = 0; i < n; ++i) {
-      const Particle& p = model.particles[i];
-      for (int k = 0; k < 3; ++k) {
-        double vk = 0.0;  // unknown or static: at rest
-        if (p.fixed) {
-          vk = p.velocity_mps[k];  // what the simulator keeps for a fixed particle
-        } else if (!static_mode && !trajectory.isOccluded(t, i) && !trajectory.isOccluded(tp, i)) {
-          vk = (xt[3 * i + k] - xp[3 * i + k]) / m.frame_period_s;
-        }
-        v[3 * i + k] = vk;
-      }
-    }
-
-    w.run_begin = static_cast<uint32_t>(m.inter_runs.size());
-    uint64_t candidates = 0;
-    double margin_all_m = 0.0;
-    if (!model.interactions.empty()) {
-      // With substeps the simulator re-finds neighbours every substep; pairs that come within
-      // max_distance during the frame must already be candidates. A fixed max_distance gets a
-      // margin of twice the fastest observed displacement over the frame (a free one is
-      // searched up to its upper bound, which already leaves room).
-      double margin_m = 0.0;
-      if (m.substeps > 1) {
-        double vmax2 = 0.0;
-        for (int i = 0; i < n; ++i)
-          vmax2 = std::max(vmax2, v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1] +
-                                      v[3 * i + 2] * v[3 * i + 2]);
-        margin_m = 2.0 * std::sqrt(vmax2) * m.frame_period_s;
-      }
-      margin_all_m = margin_m;
-      double frame_cell_m = 0.0;
-      std::vector<double> radius_m(m.inter_type.size(), 0.0);
-      for (size_t k = 0; k < m.inter_type.size(); ++k) {
-        const double c = m.inter_cutoff_m[k];
-        if (!(c > 0.0) || !std::isfinite(c)) continue;
-        radius_m[k] = c + (inter_fixed_cutoff[k] ? margin_m : 0.0);
-        frame_cell_m = std::max(frame_cell_m, radius_m[k]);
-      }
-      for (int i = 0; i < n; ++i)
-        frame_points[i] = Eigen::Vector3d(xt[3 * i], xt[3 * i + 1], xt[3 * i + 2]);
-      if (frame_cell_m > 0.0) grid.build(frame_points, frame_cell_m);
-      for (size_t k = 0; k < m.inter_type.size(); ++k) {
-        const double cutoff = radius_m[k];
-        if (!(cutoff > 0.0)) continue;
-        found.clear();
-        grid.pairsWithin(frame_points, cutoff, in_a[k], in_b[k], &found);
-        if (found.empty()) continue;
-        detail::SpringRun run{static_cast<int32_t>(k), static_cast<uint32_t>(m.inter_pairs.size()), 0};
-        std::vector<std::pair<double, std::pair<int, int>>> by_length;
-        by_length.reserve(found.size());
-        for (const auto& p : found)
-          by_length.push_back({(frame_points[p.first] - frame_points[p.second]).norm(), p});
-        std::stable_sort(by_length.begin(), by_length.end(),
-                         [](const auto& a, const auto& b) { return a.first < b.first; });
-        for (const auto& e : by_length) {
-          m.inter_pairs.push_back({e.second.first, e.second.second});
-          m.inter_d0.push_back(e.first);
-        }
-        run.end = static_cast<uint32_t>(m.inter_pairs.size());
-        candidates += run.end - run.begin;
-        m.inter_runs.push_back(run);
-      }
-    }
-    w.run_end = static_cast<uint32_t>(m.inter_runs.size());
-    w.margin_m = m.substeps > 1 ? margin_all_m : 0.0;
-    w.fixed_evals = static_cast<uint64_t>(m.substeps) * (m.engine.numSprings() + m.engine.numFlexions() + m.engine.numMuscles());
-    w.bond_evals = w.fixed_evals + static_cast<uint64_t>(m.substeps) * candidates;
-    m.bond_evals += w.bond_evals;
-    m.terms += w.valid_end - w.valid_begin;
-    m.frames.push_back(w);
-  }
+  for (int t = t_first; t <= t_last; ++t)
+    m.addFrame(model, trajectory, t, static_mode, structure, &scratch);
   if (m.inter_pairs.size() > static_cast<size_t>(UINT32_MAX))
     throw InputError("too many interaction candidate pairs");
 }

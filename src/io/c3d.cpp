@@ -274,10 +274,37 @@ bool floatResidualInvalid(float residual) {
   return static_cast<int16_t>(static_cast<uint16_t>(word)) < 0;
 }
 
-}  // namespace
+// ------------------------------------------------------------------------------------------
+// Reading, one step per part of the file
+// ------------------------------------------------------------------------------------------
 
-Trajectory readC3d(const std::string& path) {
-  C3dFile file(path, readAll(path));
+/// Header words (1-based as in the specification).
+struct Header {
+  int points = 0;              ///< word 2
+  int analog_per_frame = 0;    ///< word 3: all analog channels x samples
+  uint32_t first_frame = 0;    ///< word 4
+  uint32_t last_frame = 0;     ///< word 5
+  float scale = 0.0f;          ///< words 7-8
+  int data_start_block = 0;    ///< word 9
+  float rate_hz = 0.0f;        ///< words 11-12
+};
+
+/// The 3-D point layout the reader follows: parameters where present, else the header.
+struct PointLayout {
+  int points = 0;
+  bool float_storage = false;
+  double scale = 0.0;          ///< of integer storage (|POINT:SCALE|)
+  double rate_hz = 0.0;
+  size_t data_start = 0;       ///< byte offset of the first frame
+  uint32_t first_frame = 0;
+  int64_t frames = 0;
+  size_t value_size = 0;       ///< bytes per stored value
+  uint64_t frame_bytes = 0;    ///< bytes per frame, points and analog samples
+};
+
+/// Checks the header key and finds the parameter section; sets the processor type, which
+/// every later number depends on. Returns the section's first byte.
+size_t findParameterSection(C3dFile& file) {
   if (file.size() < kBlock) file.fail("truncated file (shorter than the 512-byte header)");
   if (file.u8(1) != kKey) file.fail("not a C3D file (header key is not 0x50)");
   const size_t parameter_block = file.u8(0);
@@ -293,84 +320,116 @@ Trajectory readC3d(const std::string& path) {
       file.fail("unknown processor type " + std::to_string(file.u8(param_start + 3)) +
                 " (expected 84 Intel, 85 DEC or 86 MIPS)");
   }
+  return param_start;
+}
 
-  // Header words (1-based as in the specification).
-  const int header_points = file.u16(2);           // word 2
-  const int header_analog_per_frame = file.u16(4);  // word 3: all analog channels x samples
-  const uint32_t header_first = file.u16(6);       // word 4
-  const uint32_t header_last = file.u16(8);        // word 5
-  const float header_scale = file.f32(12);         // words 7-8
-  const int header_data_start = file.u16(16);      // word 9
-  const float header_rate = file.f32(20);          // words 11-12
+Header readHeader(const C3dFile& file) {
+  Header h;
+  h.points = file.u16(2);
+  h.analog_per_frame = file.u16(4);
+  h.first_frame = file.u16(6);
+  h.last_frame = file.u16(8);
+  h.scale = file.f32(12);
+  h.data_start_block = file.u16(16);
+  h.rate_hz = file.f32(20);
+  return h;
+}
 
-  // The parameter section ends where its block count says; it cannot extend into the data.
+/// Byte after the parameter section: where its block count says; it cannot extend into the
+/// data.
+size_t parameterSectionEnd(const C3dFile& file, size_t param_start, const Header& header) {
   const size_t declared_blocks = file.u8(param_start + 2);
   size_t param_end = param_start + std::max<size_t>(declared_blocks, 1) * kBlock;
-  if (header_data_start > 0 && (header_data_start - 1) * kBlock > param_end)
-    param_end = (header_data_start - 1) * kBlock;  // a stale block count must not hide params
-  param_end = std::min(param_end, file.size());
-  const Parameters params(file, param_start + 4, param_end);
+  if (header.data_start_block > 0 && (header.data_start_block - 1) * kBlock > param_end)
+    param_end = (header.data_start_block - 1) * kBlock;  // a stale block count must not hide params
+  return std::min(param_end, file.size());
+}
+
+/// Element `index` of a count parameter into `out`; false when the parameter is absent.
+/// Counts may come from float parameters in a corrupt file: converting a NaN or huge float to
+/// an integer is undefined behaviour, so every count goes through this range check.
+bool readCount(const C3dFile& file, const Parameters& params, const Parameter* p, size_t index,
+               int64_t* out) {
+  double v = 0.0;
+  if (!params.number(p, index, true, &v)) return false;
+  if (!(v >= 0.0 && v <= 2147483647.0)) file.fail("invalid count in a parameter");
+  *out = static_cast<int64_t>(v);
+  return true;
+}
+
+/// Points, storage, scale, rate and data start. Parameters supersede the header where both
+/// exist (as the specification says); this also sizes the data, since writers that disagree
+/// update POINT:USED, not the header.
+void readPointParameters(const C3dFile& file, const Parameters& params, const Header& header,
+                         PointLayout* layout) {
+  int64_t n = 0;
+  layout->points = readCount(file, params, params.find("POINT", "USED"), 0, &n)
+                       ? static_cast<int>(n)
+                       : header.points;
+  if (layout->points <= 0) file.fail("no 3-D points (POINT:USED is 0)");
 
   double value = 0.0;
-  // Counts may come from float parameters in a corrupt file: converting a NaN or huge float to
-  // an integer is undefined behaviour, so every count goes through this range check.
-  auto count = [&](const Parameter* p, size_t index, int64_t* out) {
-    double v = 0.0;
-    if (!params.number(p, index, true, &v)) return false;
-    if (!(v >= 0.0 && v <= 2147483647.0)) file.fail("invalid count in a parameter");
-    *out = static_cast<int64_t>(v);
-    return true;
-  };
-  int64_t n = 0;
-  // Parameters supersede the header where both exist (as the specification says); this also
-  // sizes the data, since writers that disagree update POINT:USED, not the header.
-  const int points =
-      count(params.find("POINT", "USED"), 0, &n) ? static_cast<int>(n) : header_points;
-  if (points <= 0) file.fail("no 3-D points (POINT:USED is 0)");
-
-  double scale = header_scale;
+  double scale = header.scale;
   if (params.number("POINT", "SCALE", false, &value)) scale = value;
   if (!std::isfinite(scale) || scale == 0.0) file.fail("invalid POINT:SCALE");
-  const bool float_storage = scale < 0.0;
-  scale = std::fabs(scale);
+  layout->float_storage = scale < 0.0;
+  layout->scale = std::fabs(scale);
 
-  double rate = header_rate;
+  double rate = header.rate_hz;
   if (params.number("POINT", "RATE", false, &value)) rate = value;
   if (!std::isfinite(rate) || rate <= 0.0) file.fail("invalid POINT:RATE (frame rate must be > 0)");
+  layout->rate_hz = rate;
 
-  size_t data_start_block = static_cast<size_t>(header_data_start);
-  if (count(params.find("POINT", "DATA_START"), 0, &n) && n > 0)
+  size_t data_start_block = static_cast<size_t>(header.data_start_block);
+  if (readCount(file, params, params.find("POINT", "DATA_START"), 0, &n) && n > 0)
     data_start_block = static_cast<size_t>(n);
   if (data_start_block < 2) file.fail("invalid POINT:DATA_START");
-  const size_t data_start = (data_start_block - 1) * kBlock;
+  layout->data_start = (data_start_block - 1) * kBlock;
+}
 
-  // Frame count: the header's first/last frame, cross-checked with POINT:FRAMES (unsigned, so
-  // up to 65535). Long trials cap the 16-bit header at 65535 and store the true 32-bit range in
-  // TRIAL:ACTUAL_START_FIELD / ACTUAL_END_FIELD (low word, high word).
-  uint32_t first_frame = header_first;
-  int64_t frames = header_last >= header_first ? int64_t(header_last) - header_first + 1 : 0;
+/// Frame count: the header's first/last frame, cross-checked with POINT:FRAMES (unsigned, so
+/// up to 65535). Long trials cap the 16-bit header at 65535 and store the true 32-bit range in
+/// TRIAL:ACTUAL_START_FIELD / ACTUAL_END_FIELD (low word, high word).
+void readFrameRange(const C3dFile& file, const Parameters& params, const Header& header,
+                    PointLayout* layout) {
+  uint32_t first_frame = header.first_frame;
+  int64_t frames = header.last_frame >= header.first_frame
+                       ? int64_t(header.last_frame) - header.first_frame + 1
+                       : 0;
+  int64_t n = 0;
   int64_t start_lo, start_hi, end_lo, end_hi;
   const Parameter* trial_start = params.find("TRIAL", "ACTUAL_START_FIELD");
   const Parameter* trial_end = params.find("TRIAL", "ACTUAL_END_FIELD");
-  if (header_last == 65535 && count(trial_start, 0, &start_lo) && count(trial_start, 1, &start_hi) &&
-      count(trial_end, 0, &end_lo) && count(trial_end, 1, &end_hi)) {
+  if (header.last_frame == 65535 && readCount(file, params, trial_start, 0, &start_lo) &&
+      readCount(file, params, trial_start, 1, &start_hi) &&
+      readCount(file, params, trial_end, 0, &end_lo) &&
+      readCount(file, params, trial_end, 1, &end_hi)) {
     const int64_t s = start_lo + start_hi * 65536;
     const int64_t e = end_lo + end_hi * 65536;
     if (e >= s && s <= std::numeric_limits<uint32_t>::max()) {
       first_frame = static_cast<uint32_t>(s);
       frames = e - s + 1;
     }
-  } else if (frames == 0 && count(params.find("POINT", "FRAMES"), 0, &n)) {
+  } else if (frames == 0 && readCount(file, params, params.find("POINT", "FRAMES"), 0, &n)) {
     frames = n;  // header range unusable: trust the parameter
   }
   // When POINT:FRAMES disagrees with a usable header range, the header wins: it is what the
   // writers that get POINT:FRAMES wrong (signed overflow) still fill in correctly.
+  layout->first_frame = first_frame;
+  layout->frames = frames;
+}
 
+/// Frame size, and that every frame lies inside the file.
+void checkDataSize(const C3dFile& file, const Header& header, PointLayout* layout) {
+  const int64_t frames = layout->frames;
   if (frames <= 0) file.fail("no frames (header first/last frame and POINT:FRAMES give none)");
   if (frames > std::numeric_limits<int>::max()) file.fail("too many frames");
-  const size_t value_size = float_storage ? 4 : 2;
-  const uint64_t values_per_frame = 4ull * points + static_cast<uint64_t>(header_analog_per_frame);
-  const uint64_t frame_bytes = values_per_frame * value_size;
+  layout->value_size = layout->float_storage ? 4 : 2;
+  const uint64_t values_per_frame =
+      4ull * layout->points + static_cast<uint64_t>(header.analog_per_frame);
+  const uint64_t frame_bytes = values_per_frame * layout->value_size;
+  layout->frame_bytes = frame_bytes;
+  const size_t data_start = layout->data_start;
   // frame_bytes <= file size first: frames * frame_bytes could otherwise wrap around 2^64
   // (points from a float POINT:USED, frames from TRIAL) and pass the size check.
   if (frame_bytes > file.size() ||
@@ -381,56 +440,92 @@ Trajectory readC3d(const std::string& path) {
         << file.size() << ")";
     file.fail(msg.str());
   }
+}
 
-  const std::string units_text = [&] {
-    const std::vector<std::string> u = params.strings("POINT", "UNITS");
-    return u.empty() ? std::string() : u[0];
-  }();
+/// Units per metre of POINT:UNITS.
+double readUnits(const C3dFile& file, const Parameters& params) {
+  const std::vector<std::string> u = params.strings("POINT", "UNITS");
+  const std::string units_text = u.empty() ? std::string() : u[0];
   const double per_metre = unitsPerMetre(units_text);
   if (per_metre == 0.0)
     file.fail("unsupported POINT:UNITS '" + units_text + "' (expected mm, cm or m)");
+  return per_metre;
+}
 
-  Trajectory trajectory;
-  trajectory.frame_rate_hz = rate;
-  // Labels beyond 255 continue in LABELS2, LABELS3, ... (a parameter holds at most 255).
+/// POINT:LABELS, continued in LABELS2, LABELS3, ... (a parameter holds at most 255); points
+/// without a label are named POINT1, POINT2, ...
+std::vector<std::string> readMarkerNames(const Parameters& params, int points) {
   std::vector<std::string> labels = params.strings("POINT", "LABELS");
   for (int k = 2; static_cast<int>(labels.size()) < points; ++k) {
     const std::vector<std::string> more = params.strings("POINT", "LABELS" + std::to_string(k));
     if (more.empty()) break;
     labels.insert(labels.end(), more.begin(), more.end());
   }
+  std::vector<std::string> names;
   for (int i = 0; i < points; ++i) {
     const bool named = i < static_cast<int>(labels.size()) && !labels[i].empty();
-    trajectory.marker_names.push_back(named ? labels[i] : "POINT" + std::to_string(i + 1));
+    names.push_back(named ? labels[i] : "POINT" + std::to_string(i + 1));
   }
+  return names;
+}
 
-  const int num_frames = static_cast<int>(frames);
-  trajectory.times_s.resize(num_frames);
-  trajectory.frame_numbers.resize(num_frames);
-  trajectory.positions_m.assign(static_cast<size_t>(num_frames) * points, Eigen::Vector3d::Zero());
-  trajectory.occluded.assign(static_cast<size_t>(num_frames) * points, 1);
+/// One stored point at byte `at`, in file units, and whether it is occluded.
+bool readPoint(const C3dFile& file, const PointLayout& layout, size_t at, Eigen::Vector3d* p) {
+  bool occluded;
+  if (layout.float_storage) {
+    for (int c = 0; c < 3; ++c) (*p)[c] = file.f32(at + 4 * c);
+    occluded = floatResidualInvalid(file.f32(at + 12)) || !p->allFinite();
+  } else {
+    for (int c = 0; c < 3; ++c) (*p)[c] = file.i16(at + 2 * c) * layout.scale;
+    occluded = file.i16(at + 6) < 0;
+  }
+  // Several systems (e.g. Qualisys) write gaps as 0,0,0 with a valid residual.
+  if (p->isZero(0.0)) occluded = true;
+  return occluded;
+}
+
+/// Every frame's times, frame numbers and points (metres) into the trajectory.
+void readFrames(const C3dFile& file, const PointLayout& layout, double per_metre,
+                Trajectory* trajectory) {
+  const int points = layout.points;
+  const int num_frames = static_cast<int>(layout.frames);
+  trajectory->times_s.resize(num_frames);
+  trajectory->frame_numbers.resize(num_frames);
+  trajectory->positions_m.assign(static_cast<size_t>(num_frames) * points, Eigen::Vector3d::Zero());
+  trajectory->occluded.assign(static_cast<size_t>(num_frames) * points, 1);
   for (int t = 0; t < num_frames; ++t) {
-    trajectory.times_s[t] = t / rate;  // times from the first recorded frame
-    trajectory.frame_numbers[t] = first_frame + static_cast<uint32_t>(t);
-    const size_t frame_offset = data_start + static_cast<size_t>(t) * frame_bytes;
+    trajectory->times_s[t] = t / layout.rate_hz;  // times from the first recorded frame
+    trajectory->frame_numbers[t] = layout.first_frame + static_cast<uint32_t>(t);
+    const size_t frame_offset = layout.data_start + static_cast<size_t>(t) * layout.frame_bytes;
     for (int i = 0; i < points; ++i) {
-      const size_t at = frame_offset + static_cast<size_t>(i) * 4 * value_size;
+      const size_t at = frame_offset + static_cast<size_t>(i) * 4 * layout.value_size;
       Eigen::Vector3d p;
-      bool occluded;
-      if (float_storage) {
-        for (int c = 0; c < 3; ++c) p[c] = file.f32(at + 4 * c);
-        occluded = floatResidualInvalid(file.f32(at + 12)) || !p.allFinite();
-      } else {
-        for (int c = 0; c < 3; ++c) p[c] = file.i16(at + 2 * c) * scale;
-        occluded = file.i16(at + 6) < 0;
-      }
-      // Several systems (e.g. Qualisys) write gaps as 0,0,0 with a valid residual.
-      if (p.isZero(0.0)) occluded = true;
+      const bool occluded = readPoint(file, layout, at, &p);
       const size_t k = static_cast<size_t>(t) * points + i;
-      trajectory.occluded[k] = occluded ? 1 : 0;
-      trajectory.positions_m[k] = occluded ? Eigen::Vector3d::Zero() : Eigen::Vector3d(p / per_metre);
+      trajectory->occluded[k] = occluded ? 1 : 0;
+      trajectory->positions_m[k] =
+          occluded ? Eigen::Vector3d::Zero() : Eigen::Vector3d(p / per_metre);
     }
   }
+}
+
+}  // namespace
+
+Trajectory readC3d(const std::string& path) {
+  C3dFile file(path, readAll(path));
+  const size_t param_start = findParameterSection(file);
+  const Header header = readHeader(file);
+  const Parameters params(file, param_start + 4, parameterSectionEnd(file, param_start, header));
+  PointLayout layout;
+  readPointParameters(file, params, header, &layout);
+  readFrameRange(file, params, header, &layout);
+  checkDataSize(file, header, &layout);
+  const double per_metre = readUnits(file, params);
+
+  Trajectory trajectory;
+  trajectory.frame_rate_hz = layout.rate_hz;
+  trajectory.marker_names = readMarkerNames(params, layout.points);
+  readFrames(file, layout, per_metre, &trajectory);
   return trajectory;
 }
 

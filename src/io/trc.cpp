@@ -101,25 +101,33 @@ std::string formatDouble(double v) {
   return std::string(buf, result.ptr);
 }
 
-}  // namespace
+// ------------------------------------------------------------------------------------------
+// Reading, one step per part of the file
+// ------------------------------------------------------------------------------------------
 
-Trajectory readTrc(const std::string& path, std::vector<std::string>* warnings) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path, 0, std::string("cannot open: ") + std::strerror(errno));
-  LineReader reader(in);
+/// What the metadata lines (2 and 3) say, by key, and the line of the values.
+struct Metadata {
+  std::map<std::string, std::string> values;
+  int values_line = 0;
+};
+
+/// Line 1: "PathFileType 4 (X/Y/Z) name" (some writers use spaces instead of tabs).
+void readFileTypeLine(const std::string& path, LineReader& reader) {
   std::string line;
-
-  // Line 1: "PathFileType 4 (X/Y/Z) name" (some writers use spaces instead of tabs).
   if (!reader.next(&line)) fail(path, 0, "empty file (expected a TRC header)");
   if (trim(line).rfind("PathFileType", 0) != 0)
     fail(path, reader.number(), "not a TRC file (expected a line starting with 'PathFileType')");
+}
 
-  // Lines 2 and 3: metadata keys and values.
+/// Lines 2 and 3: metadata keys and values.
+Metadata readMetadata(const std::string& path, LineReader& reader) {
+  std::string line;
   if (!reader.next(&line)) fail(path, reader.number(), "missing metadata keys line");
   std::vector<std::string> keys = splitTabs(line);
   keys.erase(std::remove(keys.begin(), keys.end(), std::string()), keys.end());
   if (!reader.next(&line)) fail(path, reader.number(), "missing metadata values line");
-  const int values_line = reader.number();
+  Metadata meta;
+  meta.values_line = reader.number();
   std::vector<std::string> values = splitTabs(line);
   // Some writers pad the values line with doubled tabs ("100.0\t\t100.0\t\t..."); when the
   // positional pairing cannot be right, pair keys with the non-empty values instead.
@@ -128,41 +136,105 @@ Trajectory readTrc(const std::string& path, std::vector<std::string>* warnings) 
     values.erase(std::remove(values.begin(), values.end(), std::string()), values.end());
   }
   if (values.size() < keys.size())
-    fail(path, values_line,
+    fail(path, meta.values_line,
          "metadata has " + std::to_string(keys.size()) + " keys but " +
              std::to_string(values.size()) + " values");
-  std::map<std::string, std::string> meta;
-  for (size_t k = 0; k < keys.size(); ++k) meta[keys[k]] = values[k];
+  for (size_t k = 0; k < keys.size(); ++k) meta.values[keys[k]] = values[k];
+  return meta;
+}
 
-  Trajectory trajectory;
-  auto rate_it = meta.find("DataRate");
-  if (rate_it == meta.end()) fail(path, values_line, "missing DataRate");
-  if (!parseDouble(rate_it->second, &trajectory.frame_rate_hz) ||
-      !std::isfinite(trajectory.frame_rate_hz) || trajectory.frame_rate_hz <= 0.0)
-    fail(path, values_line, "DataRate '" + rate_it->second + "' is not a positive number");
+/// DataRate into the trajectory; returns the Units' units per metre.
+double readRateAndUnits(const std::string& path, const Metadata& meta, Trajectory* trajectory) {
+  auto rate_it = meta.values.find("DataRate");
+  if (rate_it == meta.values.end()) fail(path, meta.values_line, "missing DataRate");
+  if (!parseDouble(rate_it->second, &trajectory->frame_rate_hz) ||
+      !std::isfinite(trajectory->frame_rate_hz) || trajectory->frame_rate_hz <= 0.0)
+    fail(path, meta.values_line, "DataRate '" + rate_it->second + "' is not a positive number");
   // OpenSim always writes Units; a file without it follows the TRC convention of millimetres.
-  const std::string units = meta.count("Units") ? meta["Units"] : std::string("mm");
+  const auto units_it = meta.values.find("Units");
+  const std::string units = units_it != meta.values.end() ? units_it->second : std::string("mm");
   const double per_metre = unitsPerMetre(units);
   if (per_metre == 0.0)
-    fail(path, values_line, "unsupported Units '" + units + "' (expected mm, cm or m)");
+    fail(path, meta.values_line, "unsupported Units '" + units + "' (expected mm, cm or m)");
+  return per_metre;
+}
 
-  // Line 4: "Frame#<TAB>Time<TAB>name1<TAB><TAB><TAB>name2...": names are the non-empty fields
-  // after Time, which also accepts writers that omit the padding tabs.
+/// Line 4: "Frame#<TAB>Time<TAB>name1<TAB><TAB><TAB>name2...": names are the non-empty fields
+/// after Time, which also accepts writers that omit the padding tabs. Line 5: "X1 Y1 Z1 ..."
+/// coordinate labels; only its presence matters.
+void readMarkerNames(const std::string& path, LineReader& reader, Trajectory* trajectory) {
+  std::string line;
   if (!reader.next(&line)) fail(path, reader.number(), "missing marker names line");
   const int names_line = reader.number();
-  {
-    const std::vector<std::string> fields = splitTabs(line);
-    for (size_t k = 2; k < fields.size(); ++k)
-      if (!fields[k].empty()) trajectory.marker_names.push_back(fields[k]);
-  }
-  if (trajectory.marker_names.empty()) fail(path, names_line, "no marker names");
+  const std::vector<std::string> fields = splitTabs(line);
+  for (size_t k = 2; k < fields.size(); ++k)
+    if (!fields[k].empty()) trajectory->marker_names.push_back(fields[k]);
+  if (trajectory->marker_names.empty()) fail(path, names_line, "no marker names");
   // A NumMarkers value that disagrees with the names is tolerated: the names line is what the
   // data columns follow, so it takes precedence (some exporters leave NumMarkers stale).
-
-  // Line 5: "X1 Y1 Z1 ..." coordinate labels; only its presence matters.
   if (!reader.next(&line)) fail(path, reader.number(), "missing coordinate labels line");
+}
 
-  const size_t n = trajectory.marker_names.size();
+/// A data row's Frame# and Time into the trajectory. A row without a time continues the
+/// sequence at the file's rate.
+void readFrameAndTime(const std::string& path, int ln, const std::vector<std::string>& fields,
+                      Trajectory* trajectory) {
+  double frame = 0.0;
+  if (!parseDouble(fields[0], &frame) || frame < 0.0 || frame != std::floor(frame) ||
+      frame > std::numeric_limits<uint32_t>::max())
+    fail(path, ln, "Frame# '" + fields[0] + "' is not a non-negative integer");
+  double time = 0.0;
+  if (fields.size() > 1 && !fields[1].empty()) {
+    if (!parseDouble(fields[1], &time) || !std::isfinite(time))
+      fail(path, ln, "Time '" + fields[1] + "' is not a number");
+  } else {
+    // No time column in this row: continue the sequence at the file's rate.
+    time = trajectory->times_s.empty()
+               ? 0.0
+               : trajectory->times_s.back() + 1.0 / trajectory->frame_rate_hz;
+    if (!std::isfinite(time))  // e.g. DataRate 1e-307: the sequence overflows
+      fail(path, ln, "no Time and the time continued at DataRate is not finite");
+  }
+  trajectory->frame_numbers.push_back(static_cast<uint32_t>(frame));
+  trajectory->times_s.push_back(time);
+}
+
+/// Marker `i`'s sample of a data row, in metres, into the trajectory: a missing, empty or NaN
+/// field, or exactly 0,0,0, is a gap.
+void readMarkerSample(const std::string& path, int ln, const std::vector<std::string>& fields,
+                      size_t i, double per_metre, Trajectory* trajectory) {
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  bool occluded = false;
+  for (int c = 0; c < 3; ++c) {
+    const size_t k = 2 + 3 * i + c;
+    if (k >= fields.size() || fields[k].empty()) {
+      occluded = true;  // missing or empty field: a gap
+      continue;
+    }
+    double v = 0.0;
+    if (!parseDouble(fields[k], &v))
+      fail(path, ln,
+           "marker '" + trajectory->marker_names[i] + "': '" + fields[k] + "' is not a number");
+    if (std::isnan(v)) {
+      occluded = true;  // OpenSim 4 writes NaN for missing markers
+      continue;
+    }
+    if (!std::isfinite(v))
+      fail(path, ln, "marker '" + trajectory->marker_names[i] + "': infinite coordinate");
+    p[c] = v / per_metre;
+  }
+  // Many capture systems export gaps as exactly 0,0,0.
+  if (!occluded && p.isZero(0.0)) occluded = true;
+  if (occluded) p.setZero();
+  trajectory->positions_m.push_back(p);
+  trajectory->occluded.push_back(occluded ? 1 : 0);
+}
+
+/// The data rows, to the end of the file; blank lines are skipped.
+void readDataRows(const std::string& path, LineReader& reader, double per_metre,
+                  Trajectory* trajectory) {
+  const size_t n = trajectory->marker_names.size();
+  std::string line;
   while (reader.next(&line)) {
     if (trim(line).empty()) continue;  // the optional blank line, or blank lines at the end
     const int ln = reader.number();
@@ -172,62 +244,19 @@ Trajectory readTrc(const std::string& path, std::vector<std::string>* warnings) 
       fail(path, ln,
            "row has " + std::to_string(fields.size() - 2) + " coordinate fields but only " +
                std::to_string(n) + " markers are named");
-
-    double frame = 0.0;
-    if (!parseDouble(fields[0], &frame) || frame < 0.0 || frame != std::floor(frame) ||
-        frame > std::numeric_limits<uint32_t>::max())
-      fail(path, ln, "Frame# '" + fields[0] + "' is not a non-negative integer");
-    double time = 0.0;
-    if (fields.size() > 1 && !fields[1].empty()) {
-      if (!parseDouble(fields[1], &time) || !std::isfinite(time))
-        fail(path, ln, "Time '" + fields[1] + "' is not a number");
-    } else {
-      // No time column in this row: continue the sequence at the file's rate.
-      time = trajectory.times_s.empty()
-                 ? 0.0
-                 : trajectory.times_s.back() + 1.0 / trajectory.frame_rate_hz;
-      if (!std::isfinite(time))  // e.g. DataRate 1e-307: the sequence overflows
-        fail(path, ln, "no Time and the time continued at DataRate is not finite");
-    }
-    trajectory.frame_numbers.push_back(static_cast<uint32_t>(frame));
-    trajectory.times_s.push_back(time);
-
-    for (size_t i = 0; i < n; ++i) {
-      Eigen::Vector3d p = Eigen::Vector3d::Zero();
-      bool occluded = false;
-      for (int c = 0; c < 3; ++c) {
-        const size_t k = 2 + 3 * i + c;
-        if (k >= fields.size() || fields[k].empty()) {
-          occluded = true;  // missing or empty field: a gap
-          continue;
-        }
-        double v = 0.0;
-        if (!parseDouble(fields[k], &v))
-          fail(path, ln,
-               "marker '" + trajectory.marker_names[i] + "': '" + fields[k] +
-                   "' is not a number");
-        if (std::isnan(v)) {
-          occluded = true;  // OpenSim 4 writes NaN for missing markers
-          continue;
-        }
-        if (!std::isfinite(v))
-          fail(path, ln, "marker '" + trajectory.marker_names[i] + "': infinite coordinate");
-        p[c] = v / per_metre;
-      }
-      // Many capture systems export gaps as exactly 0,0,0.
-      if (!occluded && p.isZero(0.0)) occluded = true;
-      if (occluded) p.setZero();
-      trajectory.positions_m.push_back(p);
-      trajectory.occluded.push_back(occluded ? 1 : 0);
-    }
+    readFrameAndTime(path, ln, fields, trajectory);
+    for (size_t i = 0; i < n; ++i) readMarkerSample(path, ln, fields, i, per_metre, trajectory);
   }
-  if (in.bad()) fail(path, reader.number(), "read error");
-  // The rows are the data; NumFrames only serves to notice a file that ends early (a cut-off
-  // copy, an interrupted export): fewer rows than declared is a warning, the rows read are
-  // returned. More rows than declared, or a NumFrames that is not a count, is left alone:
-  // hand-edited files commonly keep a stale NumFrames.
+}
+
+/// The rows are the data; NumFrames only serves to notice a file that ends early (a cut-off
+/// copy, an interrupted export): fewer rows than declared is a warning, the rows read are
+/// returned. More rows than declared, or a NumFrames that is not a count, is left alone:
+/// hand-edited files commonly keep a stale NumFrames. No rows at all is an error.
+void checkFrameCount(const std::string& path, int last_line, const Metadata& meta,
+                     const Trajectory& trajectory, std::vector<std::string>* warnings) {
   long declared_frames = -1;
-  if (const auto it = meta.find("NumFrames"); it != meta.end()) {
+  if (const auto it = meta.values.find("NumFrames"); it != meta.values.end()) {
     double value = 0.0;
     if (parseDouble(it->second, &value) && value >= 0.0 && value == std::floor(value) &&
         value <= std::numeric_limits<int>::max())
@@ -235,13 +264,29 @@ Trajectory readTrc(const std::string& path, std::vector<std::string>* warnings) 
   }
   const long found_frames = static_cast<long>(trajectory.times_s.size());
   if (found_frames == 0)
-    fail(path, reader.number(),
+    fail(path, last_line,
          declared_frames > 0
              ? "no data rows (header declares " + std::to_string(declared_frames) + " frames)"
              : std::string("no data rows"));
   if (found_frames < declared_frames && warnings)
     warnings->push_back(path + ": header declares " + std::to_string(declared_frames) +
                         " frames, found " + std::to_string(found_frames) + " (file cut short?)");
+}
+
+}  // namespace
+
+Trajectory readTrc(const std::string& path, std::vector<std::string>* warnings) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, 0, std::string("cannot open: ") + std::strerror(errno));
+  LineReader reader(in);
+  readFileTypeLine(path, reader);
+  const Metadata meta = readMetadata(path, reader);
+  Trajectory trajectory;
+  const double per_metre = readRateAndUnits(path, meta, &trajectory);
+  readMarkerNames(path, reader, &trajectory);
+  readDataRows(path, reader, per_metre, &trajectory);
+  if (in.bad()) fail(path, reader.number(), "read error");
+  checkFrameCount(path, reader.number(), meta, trajectory, warnings);
   return trajectory;
 }
 
