@@ -84,7 +84,9 @@ TEST(ParamInfo, OneEntryPerParameterWithItsFacts) {
     EXPECT_STREQ(info.key, mme::paramKey(info.id));
     EXPECT_STRNE(info.unit, "");
     // A length-like parameter is a positive magnitude searched in log space.
-    if (info.length_like) EXPECT_TRUE(info.log_search && info.physically_positive) << info.key;
+    if (info.length_like) {
+      EXPECT_TRUE(info.log_search && info.physically_positive) << info.key;
+    }
   }
   EXPECT_TRUE(mme::paramInfo(mme::kRestLength).length_like);
   EXPECT_TRUE(mme::paramInfo(mme::kMaxDistance).length_like);

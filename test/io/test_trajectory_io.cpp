@@ -50,7 +50,7 @@ TEST(TrajectoryIo, TrcThroughTheOneEntryPoint) {
   const mme::Trajectory back = mme::readTrajectory(path, "");
   ASSERT_EQ(back.numFrames(), 2);
   ASSERT_EQ(back.marker_names, twoFrames().marker_names);
-  EXPECT_NEAR((back.positions_m[1][1] - twoFrames().positions_m[1][1]).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((back.position(1, 1) - twoFrames().position(1, 1)).norm(), 0.0, 1e-9);
 }
 
 TEST(TrajectoryIo, ARegisteredFormatIsReadAndWrittenByItsExtension) {
