@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/model_builder.h"
 #include "motion_model_estimation/identification/estimators/output_error.h"
 #include "motion_model_estimation/scenes/random_object.h"
 
@@ -266,17 +267,6 @@ bool rolloutBounded(const Problem& problem, const std::vector<double>& values, i
   return true;
 }
 
-namespace {
-mme::Param freeParam(double value, double lo, double hi) {
-  mme::Param p;
-  p.value = value;
-  p.present = p.has_value = p.free = true;
-  p.min = lo;
-  p.max = hi;
-  p.has_min = p.has_max = true;
-  return p;
-}
-}  // namespace
 
 mme::Model makeSheet(int rows, int cols, double rate_hz, uint64_t seed) {
   mme::Random random(seed);
@@ -306,8 +296,8 @@ mme::Model makeSheet(int rows, int cols, double rate_hz, uint64_t seed) {
     mme::BondType type;
     type.name = names[t];
     type.kind = mme::BondKind::kSpring;
-    type.param(mme::kStiffness) = freeParam(specs[t][0], specs[t][0] / 10, specs[t][0] * 10);
-    type.param(mme::kRestLength) = freeParam(specs[t][1], specs[t][1] / 2, specs[t][1] * 2);
+    type.param(mme::kStiffness) = mme::boundedParam(specs[t][0], specs[t][0] / 10, specs[t][0] * 10);
+    type.param(mme::kRestLength) = mme::boundedParam(specs[t][1], specs[t][1] / 2, specs[t][1] * 2);
     model.bond_types.push_back(type);
   }
   auto id = [cols](int r, int c) { return r * cols + c; };

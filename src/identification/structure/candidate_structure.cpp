@@ -9,6 +9,7 @@
 #include <string>
 
 #include "motion_model_estimation/core/forces.h"
+#include "motion_model_estimation/core/model_builder.h"
 
 namespace mme {
 namespace structure {
@@ -117,14 +118,6 @@ void appendOwnTypeBond(Model* model, BondType type, const std::array<int, 3>& pa
 
 }  // namespace
 
-Param freeParam(double value) {
-  Param p;
-  p.value = value;
-  p.present = true;
-  p.has_value = true;
-  p.free = true;
-  return p;
-}
 
 std::vector<std::pair<int, int>> candidatePairs(const Model& model, const Trajectory& data,
                                                 const StructureOptions& options) {
@@ -165,9 +158,9 @@ int addCandidateBonds(Model* model, const std::vector<std::pair<int, int>>& pair
         length += (data.position(t, p.first) - data.position(t, p.second)).norm();
         ++count;
       }
-    type.param(kStiffness) = freeParam(1.0);
-    type.param(kRestLength) = freeParam(count > 0 ? length / count : 0.1);
-    if (dampers) type.param(kDamping) = freeParam(0.1);
+    type.param(kStiffness) = valueParam(1.0, true);
+    type.param(kRestLength) = valueParam(count > 0 ? length / count : 0.1, true);
+    if (dampers) type.param(kDamping) = valueParam(0.1, true);
     appendOwnTypeBond(model, type, {{p.first, p.second, -1}});
   }
   return first;
@@ -214,9 +207,9 @@ void addCandidateFlexions(Model* model, const std::vector<std::array<int, 3>>& t
         angle += flexionAngle(data.position(t, tr[0]), data.position(t, tr[1]), data.position(t, tr[2]));
         ++count;
       }
-    type.param(kStiffness) = freeParam(1e-3);
-    type.param(kRestAngle) = freeParam(count > 0 ? angle / count : 3.0);
-    if (dampers) type.param(kDamping) = freeParam(1e-4);
+    type.param(kStiffness) = valueParam(1e-3, true);
+    type.param(kRestAngle) = valueParam(count > 0 ? angle / count : 3.0, true);
+    if (dampers) type.param(kDamping) = valueParam(1e-4, true);
     appendOwnTypeBond(model, type, {{tr[0], tr[1], tr[2]}});
   }
 }
@@ -227,7 +220,7 @@ void addCandidateViscosities(Model* model) {
     BondType type;
     type.name = "v_" + model->particles[i].name;
     type.kind = BondKind::kViscosity;
-    type.param(kViscosity) = freeParam(0.01);
+    type.param(kViscosity) = valueParam(0.01, true);
     appendOwnTypeBond(model, type, {{static_cast<int>(i), -1, -1}});
   }
 }

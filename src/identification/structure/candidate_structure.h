@@ -15,9 +15,6 @@
 namespace mme {
 namespace structure {
 
-/// A free parameter with `value` as its start.
-Param freeParam(double value);
-
 /// Candidate pairs (a < b, sorted): each particle's `options.neighbours` nearest by mean
 /// distance and every pair whose distance's std / mean is below `options.rigid_relative_std`;
 /// pairs already bonded in `model`, pairs of two fixed particles and pairs seen in fewer than 3

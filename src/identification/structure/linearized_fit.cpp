@@ -7,6 +7,7 @@
 #include <limits>
 #include <vector>
 
+#include "motion_model_estimation/core/model_builder.h"
 #include "motion_model_estimation/identification/estimators/normal_equations.h"
 #include "candidate_structure.h"
 
@@ -59,8 +60,8 @@ Model nonlinearCandidates(Model linear, const Trajectory& fit, const EquationErr
   for (size_t t = first_candidate_type; t < linear.bond_types.size(); ++t) {
     BondType& type = linear.bond_types[t];
     if (type.kind != BondKind::kSpring || !type.param(kStiffness).free) continue;
-    type.param(kStiffnessNl) = freeParam(0.0);
-    if (type.param(kDamping).free) type.param(kDampingNl) = freeParam(0.0);
+    type.param(kStiffnessNl) = valueParam(0.0, true);
+    if (type.param(kDamping).free) type.param(kDampingNl) = valueParam(0.0, true);
   }
   return linear;
 }
