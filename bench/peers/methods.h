@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "motion_model_estimation/identification/estimators/estimator_kind.h"
 #include "problem.h"
 
 namespace bench {

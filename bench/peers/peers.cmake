@@ -10,6 +10,16 @@ find_package(Ceres QUIET)
 
 add_executable(bench_peers EXCLUDE_FROM_ALL
   bench/peers/bench_peers.cpp
+  bench/peers/common.cpp
+  bench/peers/instances.cpp
+  bench/peers/speed_part.cpp
+  bench/peers/map_part.cpp
+  bench/peers/scaling_part.cpp
+  bench/peers/summary.cpp
+  bench/peers/summary_targets.cpp
+  bench/peers/summary_tables.cpp
+  bench/peers/summary_map.cpp
+  bench/peers/summary_failures.cpp
   bench/peers/problem.cpp
   bench/peers/methods.cpp)
 target_link_libraries(bench_peers ${MME_LIBS})
