@@ -58,102 +58,6 @@ struct Workspace {
   std::vector<double> x, v, f, local;
 };
 
-/// For each particle, the free parameters (indices into refs) whose value can change its
-/// one-frame prediction: a bond type's parameters act on the particles of its bonds (all the
-/// particles of the interacting groups for an interaction type); a substep's move spreads one hop
-/// to the next substep's forces (over bonds, muscle inputs and interacting groups), and a clamp
-/// moves both ends of its bond within the substep, so along a chain of clamped bonds it spreads
-/// to the chain's end. Gravity acts on every particle. Conservative: a listed parameter may
-/// still have a zero derivative.
-std::vector<std::vector<uint32_t>> parameterReach(
-    const Model& model, const std::vector<std::vector<int>>& adj,
-    const std::map<std::string, std::vector<int>>& group_members,
-    const std::vector<ParamRef>& refs) {
-  const int n = static_cast<int>(model.particles.size());
-  // Chains of clamped bonds: union-find over the particles.
-  std::vector<int> root(n);
-  for (int i = 0; i < n; ++i) root[i] = i;
-  const auto find = [&root](int i) {
-    while (root[i] != i) i = root[i] = root[root[i]];
-    return i;
-  };
-  for (const Bond& b : model.bonds) {
-    const BondType& type = model.bond_types[b.type];
-    if (type.kind == BondKind::kSpring && type.param(kMaxElongation).present)
-      root[find(b.particles[0])] = find(b.particles[1]);
-  }
-  std::vector<std::vector<int>> chain(n);
-  for (int i = 0; i < n; ++i) chain[find(i)].push_back(i);
-  // The interactions each particle's group takes part in.
-  std::vector<std::vector<int>> interactions_of(n);
-  for (size_t e = 0; e < model.interactions.size(); ++e)
-    for (int i = 0; i < n; ++i)
-      if (model.particles[i].group == model.interactions[e].group_a ||
-          model.particles[i].group == model.interactions[e].group_b)
-        interactions_of[i].push_back(static_cast<int>(e));
-  const auto members = [&group_members](const std::string& group) -> const std::vector<int>& {
-    static const std::vector<int> none;
-    const auto it = group_members.find(group);
-    return it == group_members.end() ? none : it->second;
-  };
-
-  const int types = static_cast<int>(model.bond_types.size());
-  std::vector<std::vector<uint8_t>> reached(types + 1);  // last: gravity
-  std::vector<uint8_t> used(types + 1, 0);
-  for (const ParamRef& ref : refs) used[ref.bond_type < 0 ? types : ref.bond_type] = 1;
-  for (int t = 0; t <= types; ++t) {
-    if (!used[t]) continue;
-    std::vector<uint8_t>& mark = reached[t];
-    mark.assign(n, 0);
-    std::vector<int> list;
-    const auto add = [&](int i) {
-      if (!mark[i]) {
-        mark[i] = 1;
-        list.push_back(i);
-      }
-    };
-    if (t == types) {
-      for (int i = 0; i < n; ++i) add(i);
-    } else {
-      for (const Bond& b : model.bonds)
-        if (b.type == t)
-          for (int p = 0; p < kindArity(model.bond_types[t].kind); ++p) add(b.particles[p]);
-      for (const Interaction& in : model.interactions)
-        if (in.type == t) {
-          for (int i : members(in.group_a)) add(i);
-          for (int i : members(in.group_b)) add(i);
-        }
-    }
-    const auto close_chains = [&]() {
-      for (size_t k = 0; k < list.size(); ++k)
-        for (int i : chain[find(list[k])]) add(i);
-    };
-    close_chains();
-    for (int hop = 1; hop < model.substeps; ++hop) {
-      std::vector<uint8_t> interaction_done(model.interactions.size(), 0);
-      const size_t before = list.size();
-      for (size_t k = 0; k < before; ++k) {
-        const int p = list[k];
-        for (int q : adj[p]) add(q);
-        for (int e : interactions_of[p]) {
-          if (interaction_done[e]) continue;
-          interaction_done[e] = 1;
-          for (int i : members(model.interactions[e].group_a)) add(i);
-          for (int i : members(model.interactions[e].group_b)) add(i);
-        }
-      }
-      close_chains();
-    }
-  }
-  std::vector<std::vector<uint32_t>> params_of(n);
-  for (size_t k = 0; k < refs.size(); ++k) {
-    const std::vector<uint8_t>& mark = reached[refs[k].bond_type < 0 ? types : refs[k].bond_type];
-    for (int i = 0; i < n; ++i)
-      if (mark[i]) params_of[i].push_back(static_cast<uint32_t>(k));
-  }
-  return params_of;
-}
-
 /// The model's structure as the frames' bookkeeping needs it: which particles a missing one
 /// affects, and which particles each interaction may join. Computed once per cost.
 struct Structure {
@@ -305,7 +209,6 @@ struct ShortTermCost::Impl {
   std::vector<double> inter_d0;  // length of each candidate pair at x(t), ascending per run
   std::vector<detail::SpringRun> inter_runs;  // law = interaction index
   std::vector<WorkFrame> frames;
-  std::vector<std::vector<uint32_t>> params_of_particle;  // free parameters reaching each particle
   uint64_t bond_evals = 0;
   uint64_t terms = 0;
 
@@ -575,7 +478,6 @@ ShortTermCost::ShortTermCost(const Model& model, const Trajectory& trajectory)
   m.pos = std::move(obs.positions_m);
 
   Structure structure = modelStructure(model, n);
-  m.params_of_particle = parameterReach(model, structure.adjacent, structure.group_members, m.free_refs);
   FrameScratch scratch;
   scratch.dropped.resize(n);
   scratch.frame_points.resize(n);
@@ -603,22 +505,6 @@ double ShortTermCost::residuals(const std::vector<double>& free_values,
 }
 
 size_t ShortTermCost::residualCount() const { return 3 * impl_->valid.size(); }
-
-ResidualGroups ShortTermCost::residualGroups() const {
-  const Impl& m = *impl_;
-  ResidualGroups out;
-  std::vector<int> group_of(m.n, -1);
-  for (size_t k = 0; k < m.valid.size(); ++k) {
-    int& g = group_of[m.valid[k]];
-    if (g < 0) {
-      g = static_cast<int>(out.residuals.size());
-      out.residuals.emplace_back();
-      out.parameters.push_back(m.params_of_particle[m.valid[k]]);
-    }
-    for (uint32_t c = 0; c < 3; ++c) out.residuals[g].push_back(static_cast<uint32_t>(3 * k + c));
-  }
-  return out;
-}
 
 double ShortTermCost::evaluateParallel(const std::vector<double>& free_values,
                                       std::vector<double>* local_costs, int threads) const {

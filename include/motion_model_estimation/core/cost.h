@@ -13,15 +13,6 @@
 
 namespace mme {
 
-/// Which residuals each free parameter can change, for solvers that exploit the sparsity of the
-/// Jacobian: the residuals split into groups (ShortTermCost: one per particle), each listing the
-/// free parameters whose derivatives may be non-zero there (at every parameter value; the others
-/// are exactly zero). Residuals in no group do not depend on any free parameter.
-struct ResidualGroups {
-  std::vector<std::vector<uint32_t>> residuals;   ///< per group: residual indices, ascending
-  std::vector<std::vector<uint32_t>> parameters;  ///< per group: free parameters, ascending
-};
-
 class Cost {
  public:
   virtual ~Cost() = default;
@@ -38,9 +29,6 @@ class Cost {
   virtual double residuals(const std::vector<double>& values,
                            std::vector<double>* residuals) const = 0;
   virtual size_t residualCount() const = 0;
-  /// The residuals' dependence structure; empty when unknown (every residual may depend on
-  /// every free parameter).
-  virtual ResidualGroups residualGroups() const { return {}; }
   /// Observed samples (particle, frame) that enter the cost.
   virtual uint64_t termCount() const = 0;
   virtual int numParticles() const = 0;

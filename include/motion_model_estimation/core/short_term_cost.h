@@ -45,12 +45,6 @@ class ShortTermCost final : public Cost {
                    std::vector<double>* residuals) const override;
   /// 3 x termCount().
   size_t residualCount() const override;
-  /// One group per particle with terms (its x y z residuals over all frames), depending on the
-  /// parameters of the bond types within reach of it in one frame: types with a bond at the
-  /// particle or (with substeps) within substeps - 1 hops of it over bonds and interacting
-  /// groups, widened over chains of clamped bonds (a clamp moves both ends within a substep),
-  /// and gravity.
-  ResidualGroups residualGroups() const override;
   /// Same as evaluate(), splitting frames over `threads` threads (deterministic result for a thread count).
   double evaluateParallel(const std::vector<double>& free_values, std::vector<double>* local_costs,
                           int threads) const;

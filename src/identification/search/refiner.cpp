@@ -7,7 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "motion_model_estimation/identification/search/ceres_levenberg_marquardt.h"
+#include "motion_model_estimation/identification/search/levenberg_marquardt.h"
 
 namespace mme {
 
@@ -164,8 +164,8 @@ class NloptRefiner final : public Refiner {
   RefineAlgorithm algorithm_;
 };
 
-/// Levenberg-Marquardt on the cost's residuals, solved by Ceres (ceres_levenberg_marquardt.h); a
-/// Jacobian over its memory cap falls back to BOBYQA (O(n^2) memory) from the best point reached.
+/// Levenberg-Marquardt on the cost's residuals (levenberg_marquardt.h); a Jacobian over its
+/// memory cap falls back to BOBYQA (O(n^2) memory) from the best point reached.
 class LmRefiner final : public Refiner {
  public:
   RefineAlgorithm algorithm() const override { return RefineAlgorithm::kLevenbergMarquardt; }
@@ -176,8 +176,7 @@ class LmRefiner final : public Refiner {
     out.genes = start.genes;
     out.cost = start.cost;
     const size_t n = movableGenes(space, settings.movable).size();
-    // Not the start's Jacobian, one step and the Jacobian after it.
-    if (n == 0 || settings.max_evaluations < 2 * n + 2) return out;
+    if (n == 0 || settings.max_evaluations < n + 2) return out;  // not one Jacobian and step
     LmSettings lm;
     lm.max_evaluations = settings.max_evaluations;
     lm.stall_factor = settings.stall_factor;
