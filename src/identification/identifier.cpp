@@ -252,6 +252,7 @@ class Identification {
                        "too much occlusion (--cost auto or output_error uses every observed sample)");
     if (!(model_.frame_rate_hz > 0.0)) model_.frame_rate_hz = trajectory_.frame_rate_hz;
     space_ = std::make_unique<ParameterSpace>(model_, trajectory_);
+    for (size_t k = 0; k < space_->size(); ++k) has_threshold_genes_ = has_threshold_genes_ || !space_->gene(k).smooth;
   }
 
   IdentifyResult run() {
@@ -391,9 +392,7 @@ class Identification {
   /// more (a cable object left 50 generations flat at 4.6 % off, then found the basin at
   /// generation 92), so the patience doubles where there is one.
   bool converged(const std::vector<double>& best_after, double floor_m2) const {
-    bool has_threshold_genes = false;
-    for (size_t k = 0; k < space_->size(); ++k) has_threshold_genes = has_threshold_genes || !space_->gene(k).smooth;
-    const int patience = options_.patience_generations * (has_threshold_genes ? 2 : 1);
+    const int patience = options_.patience_generations * (has_threshold_genes_ ? 2 : 1);
     const size_t g = best_after.size();
     const double best = best_after.back();
     return patience > 0 && es_->refinements() > 0 &&
@@ -425,7 +424,7 @@ class Identification {
   double omegaH(const std::vector<double>& values) const {
     Model m = model_;
     setValues(m, space_->refs(), values);
-    return stiffestModeRadPerS(m, reference_) / model_.frame_rate_hz;
+    return stiffestModeRadPerS(m, reference_) * (1.0 / model_.frame_rate_hz);
   }
 
   /// Whether the output error gives the answer. Auto: when the markers look noisy and the
@@ -622,6 +621,7 @@ class Identification {
   const std::chrono::steady_clock::time_point start_;
   std::shared_ptr<ShortTermCost> cost_;
   const bool no_terms_;
+  bool has_threshold_genes_ = false;  ///< a conditional bond's threshold is searched
   std::unique_ptr<ParameterSpace> space_;
   std::vector<std::vector<double>> seeds_;
   std::vector<std::string> notes_;
