@@ -51,6 +51,18 @@ const char* identifyStopName(IdentifyStop stop) {
   return "?";
 }
 
+std::vector<ParameterFlag> parameterFlags(const ParameterSpace& space, const std::vector<double>& genes,
+                                          const std::vector<uint8_t>* unidentifiable) {
+  std::vector<ParameterFlag> flags(space.size(), ParameterFlag::kNone);
+  for (size_t k = 0; k < space.size(); ++k) {
+    const int side = space.boundSide(k, genes[k]);
+    if (side < 0) flags[k] = ParameterFlag::kAtLowerBound;
+    else if (side > 0) flags[k] = ParameterFlag::kAtUpperBound;
+    else if (unidentifiable && (*unidentifiable)[k]) flags[k] = ParameterFlag::kUnidentifiable;
+  }
+  return flags;
+}
+
 std::vector<double> estimateStdDevs(const Cost& cost, const ParameterSpace& space,
                                     const std::vector<double>& genes, ThreadPool* pool) {
   // Gauss-Newton: Cov(genes) = s^2 (J^T J)^-1 with s^2 = cost / (residuals - genes), J the
@@ -596,12 +608,7 @@ class Identification {
     r_.substeps = model_.substeps;
     r_.stiffest_omega_h = omega_h_;
     r_.notes = notes_;
-    r_.flags.assign(r_.values.size(), ParameterFlag::kNone);
-    for (size_t k = 0; k < space_->size(); ++k) {
-      const int side = space_->boundSide(k, best_genes_[k]);
-      if (side != 0) r_.flags[k] = side < 0 ? ParameterFlag::kAtLowerBound : ParameterFlag::kAtUpperBound;
-      else if (unidentifiable_[k]) r_.flags[k] = ParameterFlag::kUnidentifiable;
-    }
+    r_.flags = parameterFlags(*space_, best_genes_, &unidentifiable_);
     if (r_.estimator == Estimator::kShortTerm)
       std_devs_ = options_.estimate_std
                       ? estimateStdDevs(*cost_, *space_, best_genes_)

@@ -3,6 +3,7 @@
 // estimates a 1-sigma uncertainty per parameter.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -104,6 +105,12 @@ struct IdentifyResult {
 IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
                              const IdentifyOptions& options,
                              const std::function<void(const Progress&)>& progress = nullptr);
+
+/// Per parameter at `genes`: within 1 % of a search bound, or else (where `unidentifiable` is
+/// given and says so) undetermined by the data. The offline result's and the live estimate's
+/// flags.
+std::vector<ParameterFlag> parameterFlags(const ParameterSpace& space, const std::vector<double>& genes,
+                                          const std::vector<uint8_t>* unidentifiable = nullptr);
 
 /// 1-sigma uncertainty of each parameter at `genes` (Gauss-Newton: Cov = s^2 (J^T J)^-1 with J
 /// the residuals' Jacobian, s^2 = cost / (residuals - genes)). NaN where not defined (the

@@ -87,19 +87,6 @@ std::vector<double> eliteStdDevs(const EvolutionStrategy& es, size_t parameters)
   return std_devs;
 }
 
-/// Per parameter: at a search bound, or (from an output-error fit) undetermined by the data.
-std::vector<ParameterFlag> parameterFlags(const ParameterSpace& space, const std::vector<double>& genes,
-                                          const OutputErrorResult* output_error) {
-  std::vector<ParameterFlag> flags(space.size(), ParameterFlag::kNone);
-  for (size_t k = 0; k < space.size(); ++k) {
-    const int side = space.boundSide(k, genes[k]);
-    if (side < 0) flags[k] = ParameterFlag::kAtLowerBound;
-    else if (side > 0) flags[k] = ParameterFlag::kAtUpperBound;
-    else if (output_error && output_error->unidentifiable[k]) flags[k] = ParameterFlag::kUnidentifiable;
-  }
-  return flags;
-}
-
 /// Stability: a long rollout (`rollout_frames`) of `best` from the window start keeps its free
 /// particles near the box the window sees them in (RolloutBound, as evaluate judges; fixed ones,
 /// such as anchors far off the body, are not judged). No rollout (a hidden free particle that
@@ -418,7 +405,7 @@ bool OnlineEstimator::update() {
     e.noise_std_m = output_error_.noise_std_m;
     genes = output_error_.genes;
   }
-  e.parameter_flags = parameterFlags(es_->space(), genes, from_output_error ? &output_error_ : nullptr);
+  e.parameter_flags = parameterFlags(es_->space(), genes, from_output_error ? &output_error_.unidentifiable : nullptr);
   Model best = model;
   setValues(best, es_->space().refs(), e.values);
   e.stable = staysBounded(best, window_data,
