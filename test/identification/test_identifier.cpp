@@ -104,7 +104,7 @@ TEST(Identifier, FlagsAUserBoundInsteadOfCrossingIt) {
 TEST(Identifier, ATimeLimitThatCutTheFitIsNeverConvergence) {
   const mme::Model truth = mme::makeHangingObject({});
   const mme::Model blank = mme::test::withoutBounds(mme::test::withoutValues(truth));
-  mme::Trajectory noisy = mme::simulateTrajectory(truth, 120, truth.frame_rate_hz);
+  mme::Trajectory noisy = mme::simulateTrajectory(truth, 60, truth.frame_rate_hz);
   mme::addGaussianNoise(&noisy, 1e-4, 3);
   mme::IdentifyOptions options = mme::identifyOptionsFor(mme::Preset::kDefault);
   options.estimate_std = false;

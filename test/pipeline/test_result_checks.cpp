@@ -13,16 +13,14 @@
 
 namespace {
 
-using mme::test::addParticle;
-using mme::test::addType;
 
 /// Two markers 25 cm apart joined by one spring of the given rest length; gravity free at g.
 mme::Model twoMarkers(double rest_length_m, double gravity_z_mps2) {
   mme::Model m;
   m.frame_rate_hz = 100.0;
-  addParticle(&m, Eigen::Vector3d(0, 0, 0));
-  addParticle(&m, Eigen::Vector3d(0.25, 0, 0));
-  const int type = addType(&m, "s00", mme::BondKind::kSpring,
+  mme::test::addParticle(&m, Eigen::Vector3d(0, 0, 0));
+  mme::test::addParticle(&m, Eigen::Vector3d(0.25, 0, 0));
+  const int type = mme::test::addType(&m, "s00", mme::BondKind::kSpring,
                            {{mme::kStiffness, 100.0}, {mme::kRestLength, rest_length_m}});
   mme::addBond(&m, type, 0, 1);
   for (int c = 0; c < 3; ++c) {
@@ -67,8 +65,8 @@ TEST(ResultChecks, TinyRestLengthIsFlaggedNamingTheMarkers) {
 
 TEST(ResultChecks, UnitsFromTheCatalogue) {
   mme::Model m = twoMarkers(0.25, -9.81);
-  addParticle(&m, Eigen::Vector3d(0, 0.25, 0));
-  const int flex = addType(&m, "f00", mme::BondKind::kFlexion,
+  mme::test::addParticle(&m, Eigen::Vector3d(0, 0.25, 0));
+  const int flex = mme::test::addType(&m, "f00", mme::BondKind::kFlexion,
                            {{mme::kStiffness, 1.0}, {mme::kRestAngle, 1.0}, {mme::kDamping, 0.1}});
   mme::addBond(&m, flex, 1, 0, 2);
   std::vector<std::string> units;
