@@ -34,9 +34,9 @@ constexpr double kTinyRestShare = 0.05;
 /// markers keep in `trajectory` (the model's particles as markers).
 std::vector<std::string> identifiedModelWarnings(const Model& identified, const Trajectory& trajectory);
 
-/// One line per horizon (1, 5, 10 frames) at which a model-free guess predicts the held-out
-/// frames better than the chosen structure (empty: it wins everywhere): the model then does
-/// not capture the motion, however well it fits.
+/// One line naming every horizon (1, 5, 10 frames) at which a model-free guess predicts the
+/// held-out frames better than the chosen structure, with both figures (empty: it wins
+/// everywhere): the model then does not capture the motion, however well it fits.
 std::vector<std::string> chosenStructureWarnings(const StructureResult& structure);
 
 }  // namespace mme
