@@ -493,7 +493,12 @@ class Identification {
     o.threads = std::max(o.threads, options_.es.threads);
     if (options_.max_wall_time_s > 0.0) {
       const double left = options_.max_wall_time_s - elapsed();
-      if (left <= 0.0) return OutputErrorResult();
+      if (left <= 0.0) {
+        OutputErrorResult none;
+        none.reason = "no time left";
+        none.stopped_by_time = true;
+        return none;
+      }
       o.max_time_s = o.max_time_s > 0.0 ? std::min(o.max_time_s, left) : left;
     }
     o.estimate_std = estimate_std;
@@ -531,9 +536,16 @@ class Identification {
     Model finer = model_;
     finer.substeps = needed;
     const OutputErrorResult oe = fit(finer, best_oe->genes, kScoutIterations, false);
-    const bool better = usable(oe) && oe.observation_cost_m2 < 0.5 * best_oe->observation_cost_m2;
-    note("the stiffest mode has omega*h = " + formatValue(omega_h_) + " per frame: " +
-         std::to_string(needed) + " substeps per frame fit the frames " + (better ? "better" : "no better") +
+    time_cut_ = time_cut_ || oe.stopped_by_time;
+    const std::string head = "the stiffest mode has omega*h = " + formatValue(omega_h_) + " per frame: " +
+                             std::to_string(needed) + " substeps per frame ";
+    if (!usable(oe)) {  // no cost to compare: say why instead of a cost of 0
+      note(head + "could not be tried (" + (oe.ran ? oe.termination : oe.reason) + "): kept " +
+           std::to_string(model_.substeps));
+      return;
+    }
+    const bool better = oe.observation_cost_m2 < 0.5 * best_oe->observation_cost_m2;
+    note(head + "fit the frames " + (better ? "better" : "no better") +
          " than " + std::to_string(model_.substeps) + " (output-error cost " +
          formatValue(oe.observation_cost_m2) + " against " + formatValue(best_oe->observation_cost_m2) +
          " m^2): " + (better ? "the model now uses " + std::to_string(needed) : "kept " + std::to_string(model_.substeps)));
@@ -548,6 +560,7 @@ class Identification {
   void runOutputError() {
     std::string failed;
     OutputErrorResult best_oe = scoutStarts(&failed);
+    if (!best_oe.ran && options_.max_wall_time_s > 0.0 && elapsed() >= options_.max_wall_time_s) time_cut_ = true;
     if (best_oe.ran) omega_h_ = omegaH(best_oe.values);
     if (best_oe.ran) trySubsteps(&best_oe);
     if (!best_oe.ran) {
@@ -555,7 +568,13 @@ class Identification {
       return;
     }
     const OutputErrorResult oe = fit(model_, best_oe.genes, options_.output_error.max_iterations, options_.estimate_std);
+    time_cut_ = time_cut_ || oe.stopped_by_time || best_oe.stopped_by_time;
     if (usable(oe) && oe.observation_cost_m2 <= best_oe.observation_cost_m2 * (1.0 + 1e-9)) best_oe = oe;
+    else if (options_.estimate_std)  // the scouts' answer stands, and they estimate no std
+      r_.std_missing_reason =
+          oe.stopped_by_time ? "the time limit cut the output-error fit before its uncertainty was computed"
+          : usable(oe)       ? "the final output-error fit ended no better than its start, whose uncertainty is not computed"
+                             : "the final output-error fit failed (" + (oe.ran ? oe.termination : oe.reason) + ")";
     noteOutputError(best_oe);
     best_genes_ = best_oe.genes;
     r_.values = best_oe.values;
@@ -602,7 +621,7 @@ class Identification {
     r_.generations = generations_done_;
     r_.evaluations = evaluations_done_;
     r_.frames = trajectory_.numFrames();
-    r_.stop = stop_;
+    r_.stop = time_cut_ ? IdentifyStop::kWallTime : stop_;
     r_.last_refine_status = es_ ? es_->lastRefineStatus() : RefineStatus::kNotRun;
     r_.bound_widenings = widenings_;
     r_.substeps = model_.substeps;
@@ -633,6 +652,7 @@ class Identification {
   std::vector<std::vector<double>> seeds_;
   std::vector<std::string> notes_;
   IdentifyStop stop_ = IdentifyStop::kGenerations;
+  bool time_cut_ = false;  ///< a time limit ended an output-error fit (never "converged")
   int generations_done_ = 0;
   uint64_t evaluations_done_ = 0;
   int widenings_ = 0;

@@ -15,6 +15,7 @@
 #include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -23,6 +24,7 @@
 #include <sstream>
 
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/io/trajectory_io.h"  // kAbsurdCoordinate_m
 
 namespace mme {
 namespace {
@@ -505,6 +507,13 @@ void readFrames(const C3dFile& file, const PointLayout& layout, double per_metre
       trajectory->occluded[k] = occluded ? 1 : 0;
       trajectory->positions_m[k] =
           occluded ? Eigen::Vector3d::Zero() : Eigen::Vector3d(p / per_metre);
+      if (trajectory->positions_m[k].cwiseAbs().maxCoeff() > kAbsurdCoordinate_m) {
+        char far[32];
+        std::snprintf(far, sizeof(far), "%g", trajectory->positions_m[k].cwiseAbs().maxCoeff());
+        file.fail("frame " + std::to_string(trajectory->frame_numbers[t]) + ", marker '" +
+                  trajectory->marker_names[static_cast<size_t>(i)] + "': a coordinate " + far +
+                  " m from the origin, no capture's (a corrupt sample?)");
+      }
     }
   }
 }

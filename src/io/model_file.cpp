@@ -25,6 +25,19 @@ namespace {
   throw InputError(path + ": cannot write: " + std::strerror(err));
 }
 
+/// What a file that is not YAML text is, recognised by its first bytes ("" when it may be a
+/// model file): a capture or a bag given as --model says so instead of a YAML syntax error.
+std::string wrongKind(const std::string& text) {
+  if (text.rfind("PathFileType", 0) == 0) return "a TRC marker file (a capture)";
+  if (text.rfind("#ROSBAG", 0) == 0) return "a rosbag";
+  // C3D: the first 512-byte block starts with the parameter block's number and the key 0x50.
+  if (text.size() >= 512 && static_cast<unsigned char>(text[0]) < 0x20 &&
+      static_cast<unsigned char>(text[1]) == 0x50)
+    return "a C3D file (a capture)";
+  if (text.find('\0') != std::string::npos) return "a binary file";
+  return "";
+}
+
 }  // namespace
 
 Model loadModelFile(const std::string& path) {
@@ -46,6 +59,10 @@ Model loadModelFile(const std::string& path) {
     text.append(buf, static_cast<std::size_t>(n));
   }
   ::close(fd);
+  const std::string kind = wrongKind(text);
+  if (!kind.empty())
+    throw InputError(path + ": this is " + kind + ", not a model file (YAML text: particles, "
+                     "bond_types, bonds; docs/model_file.md); a capture goes to --trajectory");
   return loadModelString(text, path);
 }
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <utility>
@@ -87,7 +89,39 @@ Trajectory readTrajectory(const std::string& path, const std::string& topic,
   const TrajectoryFormat format = FormatRegistry::instance().find(ext);
   Trajectory data = format.read ? format.read(path, topic) : readTrajectoryFile(path, warnings);
   if (data.numFrames() == 0) throw InputError(path + ": no frames");
+  const std::string spread = implausibleSpreadWarning(path, data);
+  if (warnings && !spread.empty()) warnings->push_back(spread);
   return data;
+}
+
+std::string implausibleSpreadWarning(const std::string& path, const Trajectory& trajectory) {
+  std::vector<double> spreads_m;  // per frame with two markers or more seen
+  for (int t = 0; t < trajectory.numFrames(); ++t) {
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+    Eigen::Vector3d hi = -lo;
+    int seen = 0;
+    for (int i = 0; i < trajectory.numMarkers(); ++i) {
+      if (trajectory.isOccluded(t, i)) continue;
+      lo = lo.cwiseMin(trajectory.position(t, i));
+      hi = hi.cwiseMax(trajectory.position(t, i));
+      ++seen;
+    }
+    if (seen >= 2) spreads_m.push_back((hi - lo).norm());
+  }
+  if (spreads_m.empty()) return "";
+  std::nth_element(spreads_m.begin(), spreads_m.begin() + spreads_m.size() / 2, spreads_m.end());
+  const double spread_m = spreads_m[spreads_m.size() / 2];
+  const bool large = spread_m > kImplausibleSpreadHigh_m;
+  if (!large && !(spread_m < kImplausibleSpreadLow_m)) return "";
+  char figure[64];
+  if (large) std::snprintf(figure, sizeof(figure), "%.3g m", spread_m);
+  else std::snprintf(figure, sizeof(figure), "%.3g mm", spread_m * 1e3);
+  return path + ": the markers span " + figure +
+         " (median over frames): a human capture spans 0.1-3 m; " +
+         (large ? "is the file in millimetres with a header saying m (or cm)? "
+                : "is the file in metres with a header saying mm? ") +
+         "Fix the units in its header (TRC: the Units value; C3D: POINT:UNITS), or every length "
+         "identified from it is off by the same factor";
 }
 
 void writeTrajectory(const std::string& path, const Trajectory& trajectory,

@@ -21,6 +21,7 @@
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/io/model_yaml.h"  // writeFileAtomically
+#include "motion_model_estimation/io/trajectory_io.h"  // kAbsurdCoordinate_m
 
 namespace mme {
 namespace {
@@ -170,8 +171,8 @@ void readMarkerNames(const std::string& path, LineReader& reader, Trajectory* tr
   for (size_t k = 2; k < fields.size(); ++k)
     if (!fields[k].empty()) trajectory->marker_names.push_back(fields[k]);
   if (trajectory->marker_names.empty()) fail(path, names_line, "no marker names");
-  // A NumMarkers value that disagrees with the names is tolerated: the names line is what the
-  // data columns follow, so it takes precedence (some exporters leave NumMarkers stale).
+  // A NumMarkers value that disagrees with the names is a warning (checkMarkerCounts): the names
+  // line is what the data columns follow, so it takes precedence.
   if (!reader.next(&line)) fail(path, reader.number(), "missing coordinate labels line");
 }
 
@@ -222,6 +223,11 @@ void readMarkerSample(const std::string& path, int ln, const std::vector<std::st
     if (!std::isfinite(v))
       fail(path, ln, "marker '" + trajectory->marker_names[i] + "': infinite coordinate");
     p[c] = v / per_metre;
+    if (std::abs(p[c]) > kAbsurdCoordinate_m)
+      fail(path, ln,
+           "frame " + fields[0] + ", marker '" + trajectory->marker_names[i] + "': coordinate '" +
+               fields[k] + "' is " + formatDouble(std::abs(p[c])) +
+               " m from the origin, no capture's (a corrupt or hand-edited sample?)");
   }
   // Many capture systems export gaps as exactly 0,0,0.
   if (!occluded && p.isZero(0.0)) occluded = true;
@@ -230,10 +236,12 @@ void readMarkerSample(const std::string& path, int ln, const std::vector<std::st
   trajectory->occluded.push_back(occluded ? 1 : 0);
 }
 
-/// The data rows, to the end of the file; blank lines are skipped.
-void readDataRows(const std::string& path, LineReader& reader, double per_metre,
-                  Trajectory* trajectory) {
+/// The data rows, to the end of the file; blank lines are skipped. Returns the most coordinate
+/// fields a row held.
+size_t readDataRows(const std::string& path, LineReader& reader, double per_metre,
+                    Trajectory* trajectory) {
   const size_t n = trajectory->marker_names.size();
+  size_t widest = 0;
   std::string line;
   while (reader.next(&line)) {
     if (trim(line).empty()) continue;  // the optional blank line, or blank lines at the end
@@ -246,7 +254,32 @@ void readDataRows(const std::string& path, LineReader& reader, double per_metre,
                std::to_string(n) + " markers are named");
     readFrameAndTime(path, ln, fields, trajectory);
     for (size_t i = 0; i < n; ++i) readMarkerSample(path, ln, fields, i, per_metre, trajectory);
+    widest = std::max(widest, fields.size() - std::min<size_t>(fields.size(), 2));
   }
+  return widest;
+}
+
+/// The header's marker counts against the data: a NumMarkers other than the names line's count,
+/// and named markers no row has a column for (always hidden: the header and the data disagree,
+/// e.g. a marker's columns deleted by hand), are warnings naming both figures.
+void checkMarkerCounts(const std::string& path, const Metadata& meta, size_t widest_fields,
+                       const Trajectory& trajectory, std::vector<std::string>* warnings) {
+  if (!warnings) return;
+  const size_t named = trajectory.marker_names.size();
+  if (const auto it = meta.values.find("NumMarkers"); it != meta.values.end()) {
+    double declared = 0.0;
+    if (parseDouble(it->second, &declared) && declared != static_cast<double>(named))
+      warnings->push_back(path + ": header declares " + it->second + " markers (NumMarkers), its names line names " +
+                          std::to_string(named) + ": the names are used");
+  }
+  const size_t with_columns = (widest_fields + 2) / 3;
+  if (with_columns < named)
+    warnings->push_back(path + ": the names line names " + std::to_string(named) +
+                        " markers but the widest data row holds " + std::to_string(widest_fields) +
+                        " coordinate fields (" + std::to_string(with_columns) + " markers): '" +
+                        trajectory.marker_names[with_columns] +
+                        "' and after are never in the data (hidden throughout); check the header "
+                        "against the columns");
 }
 
 /// The rows are the data; NumFrames only serves to notice a file that ends early (a cut-off
@@ -284,9 +317,10 @@ Trajectory readTrc(const std::string& path, std::vector<std::string>* warnings) 
   Trajectory trajectory;
   const double per_metre = readRateAndUnits(path, meta, &trajectory);
   readMarkerNames(path, reader, &trajectory);
-  readDataRows(path, reader, per_metre, &trajectory);
+  const size_t widest_fields = readDataRows(path, reader, per_metre, &trajectory);
   if (in.bad()) fail(path, reader.number(), "read error");
   checkFrameCount(path, reader.number(), meta, trajectory, warnings);
+  checkMarkerCounts(path, meta, widest_fields, trajectory, warnings);
   return trajectory;
 }
 

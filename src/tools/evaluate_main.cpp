@@ -23,6 +23,34 @@ const char* kUsage =
     "--history H: the H frames before --first-frame are read as history: no prediction starts\n"
     "there, but they place a marker hidden at a start (e.g. the frames a model was fitted on).\n";
 
+/// One line per horizon at which a guess that needs no model predicts better than the model
+/// (empty: the model wins everywhere): the model then does not capture the motion.
+std::vector<std::string> modelLosesWarnings(const mme::PredictionReport& report) {
+  std::vector<std::string> lines;
+  for (const mme::PredictionError& model : report.rows) {
+    if (model.predictor != mme::Predictor::kModel) continue;
+    std::string beaten_by;
+    for (const mme::PredictionError& guess : report.rows) {
+      if (guess.horizon != model.horizon || guess.predictor == mme::Predictor::kModel ||
+          !(guess.rms_m < model.rms_m))
+        continue;
+      char part[96];
+      std::snprintf(part, sizeof(part), "%s%s %.3g mm", beaten_by.empty() ? "" : ", ",
+                    mme::predictorName(guess.predictor), guess.rms_m * 1e3);
+      beaten_by += part;
+    }
+    if (beaten_by.empty()) continue;
+    char line[512];
+    std::snprintf(line, sizeof(line),
+                  "%d frame(s) ahead the model (%.3g mm) predicts worse than a guess that needs no "
+                  "model (%s): it does not capture this motion (another structure, sensor muscles, "
+                  "or a model identified on this capture may)",
+                  model.horizon, model.rms_m * 1e3, beaten_by.c_str());
+    lines.push_back(line);
+  }
+  return lines;
+}
+
 int run(int argc, char** argv) {
   mme::CliArgs args(argc, argv,
                     {"model", "trajectory", "topic", "first-frame", "frames", "history", "horizons", "csv"},
@@ -36,6 +64,8 @@ int run(int argc, char** argv) {
   const std::vector<int> horizons = mme::parseCountList(args.get("horizons", "1,5,10"), "--horizons", 100000, "1,5,10");
   const std::string model_path = args.get("model");
   mme::Model model = mme::loadModelFile(model_path);
+  if (model.particles.empty())
+    throw mme::InputError(model_path + ": the model has no particles: nothing to evaluate");
   for (const mme::ParamRef& ref : mme::freeParameters(model))
     if (!mme::paramOf(model, ref).has_value)
       throw mme::InputError(model_path + ": free parameter '" + ref.name +
@@ -69,6 +99,9 @@ int run(int argc, char** argv) {
   }
   std::printf("rollout of %d frames from the first start: %s\n", report.rollout_frames,
               report.rollout_bounded ? "bounded" : "UNBOUNDED (the model blows up or drifts away)");
+  std::fflush(stdout);  // the warnings come after the table, never inside it
+  for (const std::string& line : modelLosesWarnings(report))
+    std::fprintf(stderr, "evaluate: warning: %s\n", line.c_str());
   if (args.has("csv")) {
     mme::writeFileAtomically(args.get("csv"), csv.str());
     std::printf("evaluate: wrote %s\n", args.get("csv").c_str());

@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "cli_args.h"
 #include "tool_formats.h"
@@ -18,6 +19,7 @@
 #include "motion_model_estimation/core/muscle.h"
 #include "motion_model_estimation/io/model_yaml.h"
 #include "motion_model_estimation/pipeline/identify_pipeline.h"
+#include "motion_model_estimation/pipeline/result_checks.h"
 #include "motion_model_estimation/pipeline/result_metadata.h"
 
 namespace {
@@ -228,12 +230,19 @@ void connectOutput(Command* c) {
   p.progress = progressPrinter(*c);
 }
 
+/// The table of identified values with their units (from the catalogue); a std that could not
+/// be determined is "-", explained under the table rather than printed as nan.
 void printParameterTable(const mme::IdentifyResult& r, const mme::Model& reference, bool compare) {
-  std::printf("\n%-28s %16s %12s", "parameter", "value", "std");
+  std::printf("\n%-28s %16s %12s %-10s", "parameter", "value", "std", "unit");
   if (compare) std::printf(" %16s %10s", "true", "error %");
   std::printf("  %s\n", "flag");
+  bool std_missing = false;
   for (size_t k = 0; k < r.parameters.size(); ++k) {
-    std::printf("%-28s %16.9g %12.3g", r.parameters[k].name.c_str(), r.values[k], r.std_devs[k]);
+    std::printf("%-28s %16.9g", r.parameters[k].name.c_str(), r.values[k]);
+    if (std::isfinite(r.std_devs[k])) std::printf(" %12.3g", r.std_devs[k]);
+    else std::printf(" %12s", "-");
+    std_missing = std_missing || !std::isfinite(r.std_devs[k]);
+    std::printf(" %-10s", mme::parameterUnit(r.model, r.parameters[k]).c_str());
     if (compare) {
       const mme::Param& p = mme::paramOf(reference, r.parameters[k]);
       if (p.has_value) {
@@ -246,6 +255,15 @@ void printParameterTable(const mme::IdentifyResult& r, const mme::Model& referen
     }
     std::printf("  %s\n", mme::parameterFlagName(r.flags[k]));
   }
+  if (std_missing)
+    std::printf("std '-': not determined: %s\n",
+                !r.std_missing_reason.empty()
+                    ? r.std_missing_reason.c_str()
+                    : "the data do not determine the parameter (its information is singular: "
+                      "it moves nothing the markers show), or it is a threshold never crossed");
+  if (mme::unitMasses(r.model))
+    std::printf("masses: 1 kg per marker (not measured): stiffness, damping and gain are per "
+                "kilogram of marker\n");
 }
 
 void printSummary(const mme::IdentifyResult& r, const Command& c) {
@@ -282,6 +300,10 @@ int run(int argc, char** argv) {
 
   mme::Model model;
   if (!c.model_path.empty()) model = mme::loadModelFile(c.model_path);
+  if (!c.model_path.empty() && model.particles.empty())
+    throw mme::InputError(c.model_path + ": the model has no particles: nothing to identify (list "
+                          "the markers under particles:, or leave out --model with "
+                          "--select-structure to start from the capture's markers)");
   const mme::Trajectory data = mme::readToolTrajectory("identify", c.trajectory_path, c.topic);
   if (c.model_path.empty()) {
     model = mme::startingModel(data);
@@ -302,6 +324,11 @@ int run(int argc, char** argv) {
   if (!result.sensor_muscle_summary.empty())
     std::printf("identify: %s\n", result.sensor_muscle_summary.c_str());
 
+  std::fflush(stdout);  // the warnings come after the table, never inside it
+  std::vector<std::string> checks = mme::identifiedModelWarnings(result.model, trajectory);
+  if (result.structure)
+    for (const std::string& line : mme::chosenStructureWarnings(*result.structure)) checks.push_back(line);
+  for (const std::string& line : checks) std::fprintf(stderr, "identify: warning: %s\n", line.c_str());
   const mme::IdentifyResult& r = result.identified;
   const mme::IdentificationInfo info = mme::identificationInfo(r, result.notes);
   if (!info.flags.empty())

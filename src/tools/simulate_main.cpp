@@ -9,10 +9,12 @@
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/io/model_yaml.h"
 #include "motion_model_estimation/io/trajectory_io.h"
-#include "motion_model_estimation/io/trajectory_io.h"
 #include "motion_model_estimation/scenes/scenes.h"
 
 namespace {
+
+/// Marker noise of 1 cm or more is no capture system's: most likely millimetres given as metres.
+constexpr double kImplausibleNoise_m = 0.01;
 
 const char* kUsage =
     "usage: simulate (--model M.yaml | --scene NAME) --frames N --out FILE(.trc|.bag)\n"
@@ -36,6 +38,8 @@ int run(int argc, char** argv) {
   int default_frames = 100;
   if (args.has("model")) {
     model = mme::loadModelFile(args.get("model"));
+    if (model.particles.empty())
+      throw mme::InputError(args.get("model") + ": the model has no particles: nothing to simulate");
   } else {
     mme::Scene scene = mme::makeScene(args.get("scene"));
     model = scene.model;
@@ -53,6 +57,13 @@ int run(int argc, char** argv) {
     throw mme::InputError("the model has no frame_rate_hz: give --rate-hz");
   model.frame_rate_hz = rate_hz;
   const double noise_std_m = args.getDouble("noise-std", 0.0, 0.0, 1e3);
+  // --noise-std is in metres whatever --units says: 0.1 meant as millimetres is 10 cm of noise.
+  if (noise_std_m >= kImplausibleNoise_m)
+    std::fprintf(stderr,
+                 "simulate: warning: --noise-std %g is in metres (whatever --units): %g mm of noise "
+                 "per coordinate, where a capture system's is 0.1-2 mm; for %g mm give --noise-std "
+                 "%g\n",
+                 noise_std_m, noise_std_m * 1e3, noise_std_m, noise_std_m * 1e-3);
   const long seed = args.getInt("seed", 1, 0, 0x7fffffffL);
   const std::string out = args.get("out");
   const std::string ext = mme::fileExtension(out);

@@ -10,6 +10,20 @@
 
 namespace mme {
 
+namespace {
+
+/// "a, b, c" (the first 60, then how many more): both sides of a name mismatch in one line.
+std::string nameList(const std::vector<std::string>& names) {
+  const size_t shown = std::min<size_t>(names.size(), 60);
+  std::string out;
+  for (size_t k = 0; k < shown; ++k) out += (k > 0 ? ", " : "") + names[k];
+  if (names.empty()) out = "none";
+  if (shown < names.size()) out += " and " + std::to_string(names.size() - shown) + " more";
+  return out;
+}
+
+}  // namespace
+
 Trajectory readToolTrajectory(const char* tool, const std::string& path, const std::string& topic) {
   std::vector<std::string> warnings;
   Trajectory data = readTrajectory(path, topic, &warnings);
@@ -36,7 +50,10 @@ Trajectory fitTrajectoryToModel(const char* tool, const std::string& path, const
     if (!model->particles[model->particleIndex(name)].fixed) missing_free.push_back(name);
   if (!missing_free.empty())
     throw InputError(path + ": marker '" + missing_free[0] + "' of the model is not in the trajectory (" +
-                     std::to_string(missing_free.size()) + " missing)");
+                     std::to_string(missing_free.size()) + " missing: " + nameList(missing_free) +
+                     "); the file's markers: " + nameList(data.marker_names) +
+                     "; the model's particles: " + nameList(names) +
+                     " (a model file's particle names must be the capture's marker names)");
   const int total = trajectory.numFrames();
   const int first = static_cast<int>(args.getInt("first-frame", 0, 0, total - 1));
   long count = args.getInt("frames", total - first, 1, total - first);

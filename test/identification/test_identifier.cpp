@@ -97,6 +97,28 @@ TEST(Identifier, FlagsAUserBoundInsteadOfCrossingIt) {
 }
 
 // The paper's preset runs its whole generation budget (no convergence stop) with BOBYQA from 400.
+// A time limit that cuts the output-error fit after the search converged is reported as the
+// time limit, never as convergence (the output error's own limit, grown in stages so that the
+// cut is certain: the first stage always outlasts 1 ns). Without the limit the same run
+// converges.
+TEST(Identifier, ATimeLimitThatCutTheFitIsNeverConvergence) {
+  const mme::Model truth = mme::makeHangingObject({});
+  const mme::Model blank = mme::test::withoutBounds(mme::test::withoutValues(truth));
+  mme::Trajectory noisy = mme::simulateTrajectory(truth, 60, truth.frame_rate_hz);
+  mme::addGaussianNoise(&noisy, 1e-4, 3);
+  mme::IdentifyOptions options = mme::identifyOptionsFor(mme::Preset::kDefault);
+  options.estimate_std = false;
+  options.cost = mme::CostChoice::kOutputError;
+  options.output_error.grow_segments = 2;
+  const mme::IdentifyResult whole = mme::identifyModel(blank, noisy, options);
+  ASSERT_EQ(whole.estimator, mme::Estimator::kOutputError);
+  EXPECT_EQ(whole.stop, mme::IdentifyStop::kConverged);
+  options.output_error.max_time_s = 1e-9;
+  const mme::IdentifyResult cut = mme::identifyModel(blank, noisy, options);
+  EXPECT_EQ(cut.stop, mme::IdentifyStop::kWallTime);
+  EXPECT_STREQ(mme::identifyStopName(cut.stop), "wall-time limit");
+}
+
 TEST(Identifier, PaperPresetKeepsThePapersSchedule) {
   const mme::IdentifyOptions paper = mme::identifyOptionsFor(mme::Preset::kPaper);
   EXPECT_EQ(paper.patience_generations, 0);

@@ -364,6 +364,16 @@ TEST_F(C3dTest, UnitsAndUnsignedFloatResidual) {
   expectInputError([&] { readC3d(write("ft.c3d", s.build())); }, {"ft.c3d", "POINT:UNITS 'ft'"});
 }
 
+// An absurd sample (1e30 m, float storage) is refused naming the file, the frame and the marker.
+TEST_F(C3dTest, AbsurdSampleNamesFileFrameAndMarker) {
+  Synth s = threeFrameScene();
+  s.float_storage = true;
+  s.units = "m";
+  s.samples[3] = {{1e30, 5.0, 6.0, 1}};  // frame 1 (number 40001), marker B
+  expectInputError([&] { readC3d(write("absurd.c3d", s.build())); },
+                   {"absurd.c3d: frame 40001, marker 'B': a coordinate 1e+30 m from the origin"});
+}
+
 TEST_F(C3dTest, MoreThan255LabelsContinueInLabels2) {
   Synth s;
   s.frames = 2;

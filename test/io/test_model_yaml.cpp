@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <utility>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -757,6 +758,31 @@ TEST(ModelYamlFiles, ErrorsInAFileNameThePath) {
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()).rfind(path + ":4: key 'mass': mass must be > 0", 0), 0u)
         << e.what();
+  }
+}
+
+// A capture or a bag given where a model file is expected is recognised by its content and
+// named, instead of a YAML syntax error about its bytes.
+TEST(ModelYamlFiles, FilesOfAnotherKindAreNamed) {
+  TempDir dir;
+  ASSERT_FALSE(dir.path().empty());
+  const std::string c3d = MME_TEST_DATA_DIR "/real/Sample26_Walking_Hybrid_1_1.c3d";
+  const std::string trc = dir.path() + "/walk.trc";
+  std::ofstream(trc) << "PathFileType\t4\t(X/Y/Z)\twalk.trc\nDataRate\tUnits\n100\tmm\n";
+  const std::string bag = dir.path() + "/walk.bag";
+  std::ofstream(bag) << "#ROSBAG V2.0\n" << std::string(20, '\0');
+  const std::pair<std::string, std::string> cases[] = {
+      {c3d, ": this is a C3D file (a capture), not a model file"},
+      {trc, ": this is a TRC marker file (a capture), not a model file"},
+      {bag, ": this is a rosbag, not a model file"}};
+  for (const auto& [path, says] : cases) {
+    try {
+      loadModelFile(path);
+      ADD_FAILURE() << path << ": no error";
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(path + says, 0), 0u) << e.what();
+      EXPECT_NE(std::string(e.what()).find("a capture goes to --trajectory"), std::string::npos) << e.what();
+    }
   }
 }
 

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/io/trajectory_io.h"
@@ -80,6 +81,35 @@ TEST(TrajectoryIo, UnknownExtensionsAreRefusedNamingWhatIsRead) {
   EXPECT_NE(read.find(".c3d"), std::string::npos) << read;
   const std::string write = messageOf([] { mme::writeTrajectory("walk.json", twoFrames()); });
   EXPECT_NE(write.find("cannot write '.json' files (write .trc"), std::string::npos) << write;
+}
+
+// A capture in millimetres whose header says m spans hundreds of metres: reading it warns with
+// the file, the figure and the fix; the same markers in the right units give no warning, and a
+// capture in metres read as millimetres (a sub-millimetre body) warns too.
+TEST(TrajectoryIo, ImplausibleMarkerSpreadWarnsOfTheUnits) {
+  mme::Trajectory body = twoFrames();  // markers about 1 m apart
+  const std::string right = tempPath("right.trc");
+  mme::writeTrajectory(right, body);
+  std::vector<std::string> warnings;
+  mme::readTrajectory(right, "", &warnings);
+  EXPECT_EQ(warnings, std::vector<std::string>{});
+
+  for (Eigen::Vector3d& p : body.positions_m) p *= 1000.0;  // millimetre numbers under "m"
+  const std::string large = tempPath("large.trc");
+  mme::TrajectoryWriteOptions in_metres;
+  in_metres.units = "m";
+  mme::writeTrajectory(large, body, in_metres);
+  mme::readTrajectory(large, "", &warnings);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find(large + ": the markers span "), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find(" m (median over frames): a human capture spans 0.1-3 m; is the file in "
+                             "millimetres with a header saying m"),
+            std::string::npos)
+      << warnings[0];
+
+  for (Eigen::Vector3d& p : body.positions_m) p *= 1e-6;  // metre numbers under "mm"
+  EXPECT_NE(mme::implausibleSpreadWarning("small.trc", body).find("is the file in metres with a header saying mm"),
+            std::string::npos);
 }
 
 // Without the ROS layer nobody registers ".bag": the message says so rather than "unknown".

@@ -274,6 +274,44 @@ TEST_F(TrcTest, NoWarningForCompleteFilesOrMoreRowsThanDeclared) {
   EXPECT_EQ(warnings, std::vector<std::string>{path + ": header declares 3 frames, found 2 (file cut short?)"});
 }
 
+// A header that disagrees with the data: NumMarkers 3 over two names, and a second name whose
+// columns no row has (the header names a marker the data lack): both said, both figures named.
+TEST_F(TrcTest, HeaderMarkerCountsCheckedAgainstTheData) {
+  const std::string path = write("counts.trc", std::string(kHeader) + "10\t10\t2\t3\tmm\t10\t1\t2\n"
+                                                   "Frame#\tTime\tP\t\t\tQ\n"
+                                                   "\t\tX1\tY1\tZ1\tX2\tY2\tZ2\n"
+                                                   "1\t0\t1\t2\t3\n2\t0.1\t1\t2\t3\n");
+  std::vector<std::string> warnings;
+  const Trajectory t = readTrc(path, &warnings);
+  EXPECT_EQ(t.numMarkers(), 2);
+  ASSERT_EQ(warnings.size(), 2u) << ::testing::PrintToString(warnings);
+  EXPECT_EQ(warnings[0], path + ": header declares 3 markers (NumMarkers), its names line names 2: the names are used");
+  EXPECT_NE(warnings[1].find(path + ": the names line names 2 markers but the widest data row holds 3 "
+                             "coordinate fields (1 markers): 'Q' and after are never in the data"),
+            std::string::npos)
+      << warnings[1];
+  // A header that agrees with its data: no word.
+  const std::string good = write("good.trc", std::string(kHeader) + "10\t10\t2\t2\tmm\t10\t1\t2\n"
+                                                  "Frame#\tTime\tP\t\t\tQ\n"
+                                                  "\t\tX1\tY1\tZ1\tX2\tY2\tZ2\n"
+                                                  "1\t0\t1\t2\t3\t4\t5\t6\n2\t0.1\t1\t2\t3\n");
+  warnings.clear();
+  readTrc(good, &warnings);
+  EXPECT_EQ(warnings, std::vector<std::string>{});
+}
+
+// An absurd sample (1e308 mm) is refused where it is read, naming the file, line, frame and
+// marker, not later as a search's infinite bounds.
+TEST_F(TrcTest, AbsurdSampleNamesFileLineFrameAndMarker) {
+  const std::string path = write("absurd.trc", std::string(kHeader) + "10\t10\t2\t2\tmm\t10\t1\t2\n"
+                                                    "Frame#\tTime\tP\t\t\tQ\n"
+                                                    "\t\tX1\tY1\tZ1\tX2\tY2\tZ2\n"
+                                                    "1\t0\t1\t2\t3\t4\t5\t6\n"
+                                                    "2\t0.1\t1\t2\t3\t4\t1e308\t6\n");
+  expectInputError([&] { readTrc(path); },
+                   {path + ":7: frame 2, marker 'Q': coordinate '1e308' is 1e+305 m from the origin"});
+}
+
 TEST_F(TrcTest, CutBeforeTheFirstRowIsAnErrorNamingTheDeclaredFrames) {
   const std::string path = write("header_only.trc", firstLines(kReal + "subject01_walk1.trc", 6));
   expectInputError([&] { readTrc(path); },

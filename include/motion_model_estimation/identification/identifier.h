@@ -64,7 +64,8 @@ std::string validateOptions(const IdentifyOptions& options);
 /// method (its schedule, random starts, its bounds, its one-step cost, the whole budget).
 IdentifyOptions identifyOptionsFor(Preset preset);
 
-/// Why identifyModel stopped.
+/// Why identifyModel stopped. kWallTime also when the time limit cut the output-error fit after
+/// the search had converged: a cut fit is never reported as converged.
 enum class IdentifyStop { kGenerations, kTargetCost, kWallTime, kConverged };
 const char* identifyStopName(IdentifyStop stop);
 
@@ -82,6 +83,9 @@ struct IdentifyResult {
   std::vector<ParamRef> parameters;  ///< free parameters, in order
   std::vector<double> values;        ///< identified physical values
   std::vector<double> std_devs;      ///< 1-sigma (NaN where not defined)
+  /// Why every std is NaN when the reason is the run's, not the parameter's (e.g. the time limit
+  /// cut the fit before its uncertainty was computed); empty otherwise.
+  std::string std_missing_reason;
   std::vector<ParameterFlag> flags;  ///< per parameter
   double global_cost = 0.0;
   int generations = 0;

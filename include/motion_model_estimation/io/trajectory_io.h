@@ -12,6 +12,22 @@
 
 namespace mme {
 
+/// A coordinate farther than this from the origin [m] is no capture's (1000 km): the readers
+/// refuse it naming the file, the frame (TRC: the line) and the marker, instead of letting it
+/// reach a search as infinite bounds.
+constexpr double kAbsurdCoordinate_m = 1e6;
+
+/// The markers' spread (the median over frames of the diagonal of the visible markers' box) [m]
+/// outside which a capture reads as being in the wrong units: a human or an object on a bench
+/// spans 0.1-3 m.
+constexpr double kImplausibleSpreadHigh_m = 30.0;
+constexpr double kImplausibleSpreadLow_m = 0.005;
+
+/// One plain sentence when the markers of `trajectory` (read from `path`) span an implausible
+/// size for a capture (a units mistake: millimetres under a header saying m), with the measured
+/// figure and the likely fix; "" otherwise (also with fewer than two markers seen together).
+std::string implausibleSpreadWarning(const std::string& path, const Trajectory& trajectory);
+
 struct TrajectoryWriteOptions {
   std::string topic = "markers";   ///< bag: the MarkerFrame topic
   std::string frame_id = "world";  ///< bag: header.frame_id of every frame

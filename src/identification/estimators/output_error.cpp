@@ -569,6 +569,7 @@ OutputErrorResult fitOnce(const Model& model, const Trajectory& trajectory,
   out.iterations = solveWithContinuation(p.get(), options, out.noise_std_prior_m, elapsed_s, &u, &problem, &summary);
   out.ran = true;
   out.converged = summary.termination_type == ceres::CONVERGENCE;
+  out.stopped_by_time = !out.converged && options.max_time_s > 0.0 && elapsed_s() >= options.max_time_s;
   out.termination = summary.message;
   out.observation_cost_m2 = u.observationCost(*p);
   for (size_t j = 0; j < p->smooth.size(); ++j) out.genes[p->smooth[j]] = u.theta[j];
@@ -634,6 +635,7 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
         stage.estimate_std = options.estimate_std;
         r = fitOnce(model, trajectory, space, genes, stage);
       }
+      if (!last && !(options.cancel && options.cancel->load())) r.stopped_by_time = true;
       r.iterations = iterations;
       r.stages = stages;
       r.wall_time_s = elapsed_s();

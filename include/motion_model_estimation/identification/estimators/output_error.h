@@ -83,6 +83,9 @@ struct OutputErrorResult {
   int iterations = 0;               ///< of both stages (and of every grow_segments stage)
   int stages = 1;                   ///< fits on growing data run (grow_segments; 1 without)
   bool converged = false;           ///< Ceres reported convergence (not a limit)
+  /// The time limit (OutputErrorOptions::max_time_s) ended the fit, or left it no time to start:
+  /// the answer is where the solver was, not an optimum.
+  bool stopped_by_time = false;
   std::string termination;          ///< Ceres' message
   double wall_time_s = 0.0;
 };
