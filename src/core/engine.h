@@ -346,6 +346,7 @@ class Engine {
 
   void muscleForces(const LawTable& laws, const double* x, const double* v, double* f,
                     const double* activation_n, double* excitation_n) const;
+  void genericForces(const LawTable& laws, const double* x, const double* v, double* f) const;
 };
 
 }  // namespace detail

@@ -174,6 +174,17 @@ void Engine::muscleForces(const LawTable& laws, const double* x, const double* v
   }
 }
 
+// Out of line, so that forces() (the hot loop of the built-in kinds) compiles as without it.
+__attribute__((noinline)) void Engine::genericForces(const LawTable& laws, const double* x,
+                                                     const double* v, double* f) const {
+  for (const GenericBond& g : generic_) {
+    const double* xs[3] = {x + 3 * g.p[0], x + 3 * g.p[1], x + 3 * g.p[2]};
+    const double* vs[3] = {v + 3 * g.p[0], v + 3 * g.p[1], v + 3 * g.p[2]};
+    double* fs[3] = {f + 3 * g.p[0], f + 3 * g.p[1], f + 3 * g.p[2]};
+    g.law->force(laws.valuesOf(static_cast<size_t>(g.type)), xs, vs, fs);
+  }
+}
+
 void Engine::forces(const LawTable& laws, const double* x, const double* v, double* f,
                     const SpringLaw* inter_laws, const PairIdx* inter_pairs,
                     const SpringRun* inter_runs, size_t num_inter_runs,
@@ -204,12 +215,7 @@ void Engine::forces(const LawTable& laws, const double* x, const double* v, doub
     const int p = 3 * u.p;
     floorForceRaw(laws.floor[u.type], x + p, v + p, f + p);
   }
-  for (const GenericBond& g : generic_) {
-    const double* xs[3] = {x + 3 * g.p[0], x + 3 * g.p[1], x + 3 * g.p[2]};
-    const double* vs[3] = {v + 3 * g.p[0], v + 3 * g.p[1], v + 3 * g.p[2]};
-    double* fs[3] = {f + 3 * g.p[0], f + 3 * g.p[1], f + 3 * g.p[2]};
-    g.law->force(laws.valuesOf(static_cast<size_t>(g.type)), xs, vs, fs);
-  }
+  if (!generic_.empty()) genericForces(laws, x, v, f);
   for (size_t r = 0; r < num_inter_runs; ++r) {
     const SpringRun& run = inter_runs[r];
     springRun(inter_laws[run.law], inter_pairs, run.begin, run.end, x, v, f);
