@@ -96,8 +96,8 @@ struct BondKindInfo {
   bool network;
   /// How the equation error solves for its parameters (kNone: it does not).
   LinearForm linear_form;
-  /// Structure selection's name prefix for the candidate types of this kind it proposes and
-  /// types ("s" gives s00, s01, ...); nullptr: never a candidate.
+  /// Structure selection's name prefix for its shared types of this kind ("s" gives s00, s01,
+  /// ...); nullptr: never a candidate.
   const char* candidate_prefix;
   // Local-cost sites (the evolution strategy's crossover) are, for every kind, the `arity`
   // particles a bond joins: the particles its force acts on.
