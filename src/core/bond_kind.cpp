@@ -5,26 +5,30 @@ namespace mme {
 namespace {
 
 // The one place where each kind's facts are written down. The switch has no default, so a new
-// enumerator without an entry is a compile error (-Werror=switch on the core).
+// enumerator without an entry is a compile error (-Werror=switch on the core); its force law is
+// forces.cpp's bondLaw().
 BondKindInfo makeInfo(BondKind kind) {
   switch (kind) {
     case BondKind::kSpring:
       return {kind, "spring", 2,
               {kStiffness, kRestLength, kDamping, kStiffnessNl, kDampingNl, kMinDistance,
                kMaxDistance, kMaxElongation},
-              /*has_elongation=*/true, /*interactions=*/true, /*network=*/false};
+              /*has_elongation=*/true, /*interactions=*/true, /*network=*/false,
+              /*linear_form=*/LinearForm::kPair, /*candidate_prefix=*/"s"};
     case BondKind::kFlexion:
-      return {kind, "flexion", 3, {kStiffness, kRestAngle, kDamping}, false, false, false};
+      return {kind, "flexion", 3, {kStiffness, kRestAngle, kDamping}, false, false, false,
+              LinearForm::kAngle, "f"};
     case BondKind::kViscosity:
-      return {kind, "viscosity", 1, {kViscosity}, false, false, false};
-    case BondKind::kMuscle:
+      return {kind, "viscosity", 1, {kViscosity}, false, false, false, LinearForm::kDrag, "v"};
+    case BondKind::kMuscle:  // its activation is a network of other bonds' motion
       return {kind, "muscle", 2, {kStiffness, kRestLength, kDamping, kGain, kActivationTime},
-              true, false, true};
+              true, false, true, LinearForm::kNone, nullptr};
     case BondKind::kFloor:  // a conditional bond to the floor plane: ground contact
       return {kind, "floor", 1, {kStiffness, kDamping, kFriction, kHeight, kContactDepth},
-              false, false, false};
+              false, false, false, LinearForm::kNone, nullptr};
   }
-  return {kind, "?", 0, {}, false, false, false};  // not reached: every enumerator is listed
+  // not reached: every enumerator is listed
+  return {kind, "?", 0, {}, false, false, false, LinearForm::kNone, nullptr};
 }
 
 struct Catalogue {
@@ -69,26 +73,27 @@ namespace {
 
 // Each parameter kind's facts, written down once; the switch has no default (-Werror=switch).
 ParamInfo makeParamInfo(ParamId id) {
-  //                     unit           log    positive length
+  constexpr double kNoBound = 1e300;  // SpringLaw::max_distance's "no upper condition"
+  //                     unit           log    positive length absent
   switch (id) {
-    case kStiffness: return {id, paramKey(id), "N/m", true, true, false};
-    case kRestLength: return {id, paramKey(id), "m", true, true, true};
-    case kDamping: return {id, paramKey(id), "N s/m", true, true, false};
-    case kStiffnessNl: return {id, paramKey(id), "N/m^3", true, false, false};
-    case kDampingNl: return {id, paramKey(id), "N s^2/m^2", true, true, false};
-    case kMinDistance: return {id, paramKey(id), "m", true, true, true};
-    case kMaxDistance: return {id, paramKey(id), "m", true, true, true};
-    case kMaxElongation: return {id, paramKey(id), "1", true, true, false};
-    case kRestAngle: return {id, paramKey(id), "rad", false, false, false};
-    case kViscosity: return {id, paramKey(id), "N s/m", true, true, false};
-    case kGain: return {id, paramKey(id), "N", true, true, false};
-    case kFriction: return {id, paramKey(id), "N s/m", true, true, false};
-    case kHeight: return {id, paramKey(id), "m", false, false, false};
-    case kContactDepth: return {id, paramKey(id), "m", true, true, false};
-    case kActivationTime: return {id, paramKey(id), "s", true, true, false};
+    case kStiffness: return {id, paramKey(id), "N/m", true, true, false, 0.0};
+    case kRestLength: return {id, paramKey(id), "m", true, true, true, 0.0};
+    case kDamping: return {id, paramKey(id), "N s/m", true, true, false, 0.0};
+    case kStiffnessNl: return {id, paramKey(id), "N/m^3", true, false, false, 0.0};
+    case kDampingNl: return {id, paramKey(id), "N s^2/m^2", true, true, false, 0.0};
+    case kMinDistance: return {id, paramKey(id), "m", true, true, true, 0.0};
+    case kMaxDistance: return {id, paramKey(id), "m", true, true, true, kNoBound};
+    case kMaxElongation: return {id, paramKey(id), "1", true, true, false, 0.0};
+    case kRestAngle: return {id, paramKey(id), "rad", false, false, false, 0.0};
+    case kViscosity: return {id, paramKey(id), "N s/m", true, true, false, 0.0};
+    case kGain: return {id, paramKey(id), "N", true, true, false, 0.0};
+    case kFriction: return {id, paramKey(id), "N s/m", true, true, false, 0.0};
+    case kHeight: return {id, paramKey(id), "m", false, false, false, 0.0};
+    case kContactDepth: return {id, paramKey(id), "m", true, true, false, 0.0};
+    case kActivationTime: return {id, paramKey(id), "s", true, true, false, 0.0};
     case kParamCount: break;
   }
-  return {id, "?", "", false, false, false};  // not reached for a valid id
+  return {id, "?", "", false, false, false, 0.0};  // not reached for a valid id
 }
 
 struct ParamCatalogue {

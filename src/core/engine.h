@@ -49,6 +49,13 @@ struct MuscleBond {
   int32_t a, b, type;
   uint32_t input_begin, input_end;
 };
+/// A bond of a kind without a fast path: the particles it joins (its kind's arity of them), its
+/// type and its kind's law (bondLaw).
+struct GenericBond {
+  int32_t p[3];
+  int32_t type;
+  const BondLaw* law;
+};
 /// A bond a muscle reads: its ends and its type (whose rest length gives the elongation).
 struct InputBond {
   int32_t a, b, type;
@@ -72,11 +79,20 @@ struct LawTable {
   std::vector<FloorLaw> floor;           ///< ground contact
   std::vector<MuscleTypeLaw> muscle;     ///< activation of muscle types (passive part: spring)
   std::vector<double> network;           ///< every muscle type's network parameters, concatenated
+  /// Every type's value of every ParamId, kParamCount per type (absent: ParamInfo::absent_value):
+  /// the generic path's parameters, and the source the law forms above are derived from.
+  std::vector<double> values;
   double gravity_mps2[3] = {0, 0, 0};
 
   void load(const Model& model);
   /// Writes one parameter (as addressed by freeParameters / presentParameters).
   void set(const ParamRef& ref, double value);
+  /// Type t's parameters (kParamCount values, indexed by ParamId).
+  const double* valuesOf(size_t t) const { return values.data() + t * kParamCount; }
+
+ private:
+  /// Derives type t's law forms from its values.
+  void derive(size_t t);
 };
 
 // ------------------------------------------------------------------ per-bond kernels
@@ -251,9 +267,28 @@ inline double flexionEnergyRaw(const FlexionLaw& law, const double* xa, const do
   return 0.5 * law.stiffness * d * d;
 }
 
-SpringLaw springLawOf(const BondType& type);
-FlexionLaw flexionLawOf(const BondType& type);
-FloorLaw floorLawOf(const BondType& type);
+// The law forms from a type's value of every ParamId (LawTable::values' layout).
+inline SpringLaw springLawOf(const double* p) {
+  SpringLaw law;
+  law.stiffness = p[kStiffness];
+  law.rest_length = p[kRestLength];
+  law.damping = p[kDamping];
+  law.stiffness_nl = p[kStiffnessNl];
+  law.damping_nl = p[kDampingNl];
+  law.min_distance = p[kMinDistance];
+  law.max_distance = p[kMaxDistance];
+  return law;
+}
+inline FlexionLaw flexionLawOf(const double* p) {
+  FlexionLaw law;
+  law.stiffness = p[kStiffness];
+  law.rest_angle = p[kRestAngle];
+  law.damping = p[kDamping];
+  return law;
+}
+inline FloorLaw floorLawOf(const double* p) {
+  return {p[kStiffness], p[kDamping], p[kFriction], p[kHeight], p[kContactDepth]};
+}
 
 // ------------------------------------------------------------------ compiled model
 
@@ -262,18 +297,21 @@ FloorLaw floorLawOf(const BondType& type);
 class Engine {
  public:
   Engine() = default;
-  explicit Engine(const Model& model);
+  /// `fast_paths` false sends every bond whose kind has a generic law (bondLaw) through the
+  /// generic per-bond path, so a test can check that path against the fast ones.
+  explicit Engine(const Model& model, bool fast_paths = true);
 
   int numParticles() const { return n_; }
   size_t numSprings() const { return spring_pairs_.size(); }
   size_t numFlexions() const { return flexions_.size(); }
   size_t numMuscles() const { return muscles_.size(); }
+  size_t numGenericBonds() const { return generic_.size(); }
   /// The muscles in bond order (the order of State::activation_n).
   const std::vector<MuscleBond>& muscles() const { return muscles_; }
   const std::vector<uint8_t>& fixed() const { return fixed_; }
 
-  /// f = gravity + unary viscosity + installed springs + flexion + muscles + floor contacts + the
-  /// given interaction runs
+  /// f = gravity + unary viscosity + installed springs + flexion + muscles + floor contacts +
+  /// bonds on the generic path + the given interaction runs
   /// (pairs[run.begin..run.end) with law inter_laws[run.law]).
   /// A muscle's activation is its network's output (its excitation) unless `activation_n` is
   /// given and its type has an activation time constant: then activation_n[k] (k: the muscle's
@@ -286,7 +324,8 @@ class Engine {
   void integrate(double dt_s, const double* f, double* x, double* v) const;
   /// Provot: one pass in bond order over springs whose type has max_elongation.
   void clamp(const LawTable& laws, double* x) const;
-  /// Elastic energy of installed springs and flexion bonds (interactions excluded) [J].
+  /// Elastic energy of installed springs, flexion bonds, muscles' passive parts and generic bonds
+  /// whose law has an energy (interactions excluded) [J].
   double bondEnergy(const LawTable& laws, const double* x) const;
 
  private:
@@ -303,9 +342,11 @@ class Engine {
   std::vector<ClampBond> clamps_;  // in bond order
   std::vector<MuscleBond> muscles_;      // in bond order
   std::vector<InputBond> muscle_inputs_;
+  std::vector<GenericBond> generic_;  // in bond order
 
   void muscleForces(const LawTable& laws, const double* x, const double* v, double* f,
                     const double* activation_n, double* excitation_n) const;
+  void genericForces(const LawTable& laws, const double* x, const double* v, double* f) const;
 };
 
 }  // namespace detail

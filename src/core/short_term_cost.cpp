@@ -381,7 +381,8 @@ void ShortTermCost::Impl::addFrame(const Model& model, const Trajectory& traject
   w.run_end = static_cast<uint32_t>(inter_runs.size());
   w.margin_m = substeps > 1 ? margin_all_m : 0.0;
   w.fixed_evals = static_cast<uint64_t>(substeps) *
-                  (engine.numSprings() + engine.numFlexions() + engine.numMuscles());
+                  (engine.numSprings() + engine.numFlexions() + engine.numMuscles() +
+                   engine.numGenericBonds());
   w.bond_evals = w.fixed_evals + static_cast<uint64_t>(substeps) * candidates;
   bond_evals += w.bond_evals;
   terms += w.valid_end - w.valid_begin;

@@ -30,32 +30,6 @@ namespace detail {
 
 // ------------------------------------------------------------------ laws
 
-SpringLaw springLawOf(const BondType& type) {
-  SpringLaw law;
-  law.stiffness = type.value(kStiffness);
-  law.rest_length = type.value(kRestLength);
-  law.damping = type.value(kDamping);
-  law.stiffness_nl = type.value(kStiffnessNl);
-  law.damping_nl = type.value(kDampingNl);
-  law.min_distance = type.value(kMinDistance);
-  law.max_distance = type.param(kMaxDistance).present ? type.param(kMaxDistance).value
-                                                      : kNoMaxDistance_m;
-  return law;
-}
-
-FloorLaw floorLawOf(const BondType& type) {
-  return {type.value(kStiffness), type.value(kDamping), type.value(kFriction), type.value(kHeight),
-          type.value(kContactDepth)};
-}
-
-FlexionLaw flexionLawOf(const BondType& type) {
-  FlexionLaw law;
-  law.stiffness = type.value(kStiffness);
-  law.rest_angle = type.value(kRestAngle);
-  law.damping = type.value(kDamping);
-  return law;
-}
-
 void LawTable::load(const Model& model) {
   const size_t nt = model.bond_types.size();
   spring.assign(nt, SpringLaw());
@@ -64,25 +38,36 @@ void LawTable::load(const Model& model) {
   max_elongation.assign(nt, 0.0);
   floor.assign(nt, FloorLaw());
   muscle.assign(nt, MuscleTypeLaw());
+  values.assign(nt * kParamCount, 0.0);
   network.clear();
-  // Every law form of every type is filled (absent parameters read 0): a kind only reads its
-  // own form, and this stays independent of the kind.
+  // Every law form of every type is derived (absent parameters read their absent value): a kind
+  // only reads its own form, and this stays independent of the kind.
   for (size_t t = 0; t < nt; ++t) {
     const BondType& type = model.bond_types[t];
-    spring[t] = springLawOf(type);
-    flexion[t] = flexionLawOf(type);
-    floor[t] = floorLawOf(type);
-    viscosity_nspm[t] = type.value(kViscosity);
-    max_elongation[t] = type.value(kMaxElongation);
+    for (int id = 0; id < kParamCount; ++id) {
+      const Param& p = type.param(static_cast<ParamId>(id));
+      values[t * kParamCount + id] =
+          p.present ? p.value : paramInfo(static_cast<ParamId>(id)).absent_value;
+    }
+    derive(t);
     MuscleTypeLaw& m = muscle[t];
-    m.gain_n = type.value(kGain);
-    m.activation_time_s = type.value(kActivationTime);
     m.hidden = type.network_hidden;
     m.network_offset = static_cast<uint32_t>(network.size());
     for (const Param& p : type.network) network.push_back(p.present ? p.value : 0.0);
   }
   const Eigen::Vector3d g = model.gravity();
   for (int k = 0; k < 3; ++k) gravity_mps2[k] = g[k];
+}
+
+void LawTable::derive(size_t t) {
+  const double* p = valuesOf(t);
+  spring[t] = springLawOf(p);
+  flexion[t] = flexionLawOf(p);
+  floor[t] = floorLawOf(p);
+  viscosity_nspm[t] = p[kViscosity];
+  max_elongation[t] = p[kMaxElongation];
+  muscle[t].gain_n = p[kGain];
+  muscle[t].activation_time_s = p[kActivationTime];
 }
 
 void LawTable::set(const ParamRef& ref, double value) {
@@ -95,34 +80,15 @@ void LawTable::set(const ParamRef& ref, double value) {
     network[muscle[t].network_offset + static_cast<uint32_t>(ref.param - kParamCount)] = value;
     return;
   }
-  SpringLaw& s = spring[t];
-  FlexionLaw& fl = flexion[t];
-  FloorLaw& fc = floor[t];
-  // A parameter id means the same thing in every law form that has it; writing them all keeps
-  // this independent of the type's kind (the unused forms are never read).
-  switch (static_cast<ParamId>(ref.param)) {
-    case kStiffness: s.stiffness = value; fl.stiffness = value; fc.stiffness = value; break;
-    case kRestLength: s.rest_length = value; break;
-    case kDamping: s.damping = value; fl.damping = value; fc.damping = value; break;
-    case kStiffnessNl: s.stiffness_nl = value; break;
-    case kDampingNl: s.damping_nl = value; break;
-    case kMinDistance: s.min_distance = value; break;
-    case kMaxDistance: s.max_distance = value; break;
-    case kMaxElongation: max_elongation[t] = value; break;
-    case kRestAngle: fl.rest_angle = value; break;
-    case kViscosity: viscosity_nspm[t] = value; break;
-    case kGain: muscle[t].gain_n = value; break;
-    case kFriction: fc.friction = value; break;
-    case kHeight: fc.height = value; break;
-    case kContactDepth: fc.contact_depth = value; break;
-    case kActivationTime: muscle[t].activation_time_s = value; break;
-    case kParamCount: break;  // not a parameter (network parameters are handled above)
-  }
+  // The value, then every law form derived again from the type's values: a parameter id means
+  // the same thing in every form that has it, whatever the type's kind.
+  values[t * kParamCount + static_cast<size_t>(ref.param)] = value;
+  derive(t);
 }
 
 // ------------------------------------------------------------------ engine
 
-Engine::Engine(const Model& model) {
+Engine::Engine(const Model& model, bool fast_paths) {
   n_ = static_cast<int>(model.particles.size());
   inv_mass3_.assign(3 * n_, 0.0);
   mobile3_.assign(3 * n_, 0.0);
@@ -142,36 +108,45 @@ Engine::Engine(const Model& model) {
   const int nt = static_cast<int>(model.bond_types.size());
   for (int t = 0; t < nt; ++t) {
     const BondType& type = model.bond_types[t];
-    if (type.kind != BondKind::kSpring) continue;
+    if (type.kind != BondKind::kSpring || !fast_paths) continue;
     SpringRun run{t, static_cast<uint32_t>(spring_pairs_.size()), 0};
     for (const Bond& b : model.bonds)
       if (b.type == t) spring_pairs_.push_back({b.particles[0], b.particles[1]});
     run.end = static_cast<uint32_t>(spring_pairs_.size());
     if (run.end > run.begin) spring_runs_.push_back(run);
   }
+  // The built-in kinds' fast paths (specialised arrays); every other kind, or every kind with a
+  // law when `fast_paths` is off, goes through the generic path with its kind's bondLaw().
   for (const Bond& b : model.bonds) {
     const BondType& type = model.bond_types[b.type];
-    switch (type.kind) {
-      case BondKind::kFlexion:
-        flexions_.push_back({b.particles[0], b.particles[1], b.particles[2], b.type});
-        break;
-      case BondKind::kViscosity: unary_.push_back({b.particles[0], b.type}); break;
-      case BondKind::kFloor: floors_.push_back({b.particles[0], b.type}); break;
-      case BondKind::kSpring:
-        if (type.param(kMaxElongation).present)
-          clamps_.push_back({b.particles[0], b.particles[1], b.type});
-        break;
-      case BondKind::kMuscle: {
-        MuscleBond m{b.particles[0], b.particles[1], b.type,
-                     static_cast<uint32_t>(muscle_inputs_.size()), 0};
-        for (int in : b.inputs) {
-          const Bond& ib = model.bonds[in];
-          muscle_inputs_.push_back({ib.particles[0], ib.particles[1], ib.type});
-        }
-        m.input_end = static_cast<uint32_t>(muscle_inputs_.size());
-        muscles_.push_back(m);
-        break;
+    const BondKind kind = type.kind;
+    const BondLaw& law = bondLaw(kind);
+    if (kind == BondKind::kSpring && type.param(kMaxElongation).present)
+      clamps_.push_back({b.particles[0], b.particles[1], b.type});  // a constraint, not a force
+    if (kind == BondKind::kMuscle) {
+      MuscleBond m{b.particles[0], b.particles[1], b.type,
+                   static_cast<uint32_t>(muscle_inputs_.size()), 0};
+      for (int in : b.inputs) {
+        const Bond& ib = model.bonds[in];
+        muscle_inputs_.push_back({ib.particles[0], ib.particles[1], ib.type});
       }
+      m.input_end = static_cast<uint32_t>(muscle_inputs_.size());
+      muscles_.push_back(m);
+    } else if (fast_paths && kind == BondKind::kSpring) {
+      // in spring_runs_ above
+    } else if (fast_paths && kind == BondKind::kFlexion) {
+      flexions_.push_back({b.particles[0], b.particles[1], b.particles[2], b.type});
+    } else if (fast_paths && kind == BondKind::kViscosity) {
+      unary_.push_back({b.particles[0], b.type});
+    } else if (fast_paths && kind == BondKind::kFloor) {
+      floors_.push_back({b.particles[0], b.type});
+    } else if (law.force != nullptr) {
+      GenericBond g{{b.particles[0], b.particles[0], b.particles[0]}, b.type, &law};
+      for (int k = 1; k < kindArity(kind); ++k) g.p[k] = b.particles[k];  // the rest: unread
+      generic_.push_back(g);
+    } else {
+      throw std::logic_error(std::string("Engine: bond kind '") + kindName(kind) +
+                             "' has neither a fast path nor a force law (bondLaw)");
     }
   }
 }
@@ -196,6 +171,17 @@ void Engine::muscleForces(const LawTable& laws, const double* x, const double* v
         activation_n && law.activation_time_s > 0.0 ? activation_n[index] : excitation;
     const int a = 3 * m.a, b = 3 * m.b;
     musclePair(laws.spring[m.type], activation, x + a, x + b, v + a, v + b, f + a, f + b);
+  }
+}
+
+// Out of line, so that forces() (the hot loop of the built-in kinds) compiles as without it.
+__attribute__((noinline)) void Engine::genericForces(const LawTable& laws, const double* x,
+                                                     const double* v, double* f) const {
+  for (const GenericBond& g : generic_) {
+    const double* xs[3] = {x + 3 * g.p[0], x + 3 * g.p[1], x + 3 * g.p[2]};
+    const double* vs[3] = {v + 3 * g.p[0], v + 3 * g.p[1], v + 3 * g.p[2]};
+    double* fs[3] = {f + 3 * g.p[0], f + 3 * g.p[1], f + 3 * g.p[2]};
+    g.law->force(laws.valuesOf(static_cast<size_t>(g.type)), xs, vs, fs);
   }
 }
 
@@ -229,6 +215,7 @@ void Engine::forces(const LawTable& laws, const double* x, const double* v, doub
     const int p = 3 * u.p;
     floorForceRaw(laws.floor[u.type], x + p, v + p, f + p);
   }
+  if (!generic_.empty()) genericForces(laws, x, v, f);
   for (size_t r = 0; r < num_inter_runs; ++r) {
     const SpringRun& run = inter_runs[r];
     springRun(inter_laws[run.law], inter_pairs, run.begin, run.end, x, v, f);
@@ -277,6 +264,11 @@ double Engine::bondEnergy(const LawTable& laws, const double* x) const {
   // A muscle's passive part only: its activation is a driving force, not a potential.
   for (const MuscleBond& m : muscles_)
     e += springEnergyRaw(laws.spring[m.type], x + 3 * m.a, x + 3 * m.b);
+  for (const GenericBond& g : generic_) {
+    if (g.law->energy == nullptr) continue;
+    const double* xs[3] = {x + 3 * g.p[0], x + 3 * g.p[1], x + 3 * g.p[2]};
+    e += g.law->energy(laws.valuesOf(static_cast<size_t>(g.type)), xs);
+  }
   return e;
 }
 

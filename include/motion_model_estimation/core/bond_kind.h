@@ -1,7 +1,9 @@
 // The catalogue of bond kinds: every fixed fact about a kind (its YAML name, arity, parameter
-// list, what else it may be used for) in one table, bondKindInfo(). Adding a kind is one entry
-// here plus its force law in the engine; every `switch` over BondKind is exhaustive (no
-// `default:`), and the core is built with -Werror=switch, so a forgotten kind does not compile.
+// list, how the estimators and structure selection treat it) in one table, bondKindInfo().
+// Adding a kind is one entry here plus its force law in forces.cpp (bondLaw); the rest of the
+// package reads these tables (docs/architecture.md "Adding a bond kind"). The switches that
+// remain over BondKind are exhaustive (no `default:`) and the core is built with
+// -Werror=switch, so a forgotten kind does not compile; test_bond_kind walks every kind's entry.
 #pragma once
 
 #include <string>
@@ -56,9 +58,28 @@ struct ParamInfo {
   /// A distance between particles [m]: its default range and start come from the observed
   /// bond lengths.
   bool length_like;
+  /// The value the force laws use when the key is absent: 0 (the term is off), or a bound that
+  /// never applies (max_distance: no upper condition).
+  double absent_value;
 };
 /// The catalogue entry of a parameter kind (id < kParamCount).
 const ParamInfo& paramInfo(ParamId id);
+
+/// How a kind's parameters enter its force linearly: the rows the equation error writes for its
+/// bonds, and the values structure selection reads back for a candidate type. Each form fixes
+/// the parameters it solves for, so a kind of an existing form needs no estimator code.
+enum class LinearForm {
+  /// Not linear in its parameters (conditional, or driven by a network): its free parameters are
+  /// left to the evolution strategy and the refinements; its fixed ones are known forces.
+  kNone,
+  /// A pair's tension k (l - rest_length) + c s + k_nl (l - rest_length)^3 + c_nl s|s| along the
+  /// pair (s: elongation speed).
+  kPair,
+  /// A torque -k (theta - rest_angle) - c dtheta/dt about the middle particle's angle.
+  kAngle,
+  /// A drag -viscosity v on one particle.
+  kDrag,
+};
 
 /// What is fixed about one bond kind.
 struct BondKindInfo {
@@ -73,6 +94,11 @@ struct BondKindInfo {
   bool interactions;
   /// Has variable-length network parameters (BondType::network) and per-bond inputs.
   bool network;
+  /// How the equation error solves for its parameters (kNone: it does not).
+  LinearForm linear_form;
+  /// Structure selection's name prefix for its shared types of this kind ("s" gives s00, s01,
+  /// ...); nullptr: never a candidate.
+  const char* candidate_prefix;
   // Local-cost sites (the evolution strategy's crossover) are, for every kind, the `arity`
   // particles a bond joins: the particles its force acts on.
 };

@@ -3,6 +3,8 @@
 
 #include <Eigen/Core>
 
+#include "motion_model_estimation/core/bond_kind.h"
+
 namespace mme {
 
 /// Parameters of one spring type in the form the inner loop wants.
@@ -57,5 +59,23 @@ void addFlexionForce(const FlexionLaw& law, const Eigen::Vector3d& xa, const Eig
                      Eigen::Vector3d* fc);
 double flexionEnergy(const FlexionLaw& law, const Eigen::Vector3d& xa, const Eigen::Vector3d& xb,
                      const Eigen::Vector3d& xc);
+
+/// One bond's law in the form the simulator's generic per-bond path calls, so that a kind needs
+/// no code in the simulator. `params` holds the bond type's value of every ParamId, indexed by
+/// it (an absent parameter reads ParamInfo::absent_value); x[p], v[p] and f[p] are the
+/// position [m], velocity [m/s] and force accumulator [N] (3 doubles each) of the p-th particle
+/// the bond joins, p < bondKindInfo(kind).arity.
+struct BondLaw {
+  /// Adds the bond's forces to f.
+  void (*force)(const double* params, const double* const* x, const double* const* v,
+                double* const* f);
+  /// Its potential energy [J]; nullptr when it stores none the total energy counts (a drag, a
+  /// contact).
+  double (*energy)(const double* params, const double* const* x);
+};
+
+/// The law of a kind. Both nullptr for a kind whose force needs more than its own particles and
+/// parameters (a muscle: its network reads other bonds; the simulator has its own path for it).
+const BondLaw& bondLaw(BondKind kind);
 
 }  // namespace mme

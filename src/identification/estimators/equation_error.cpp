@@ -111,13 +111,25 @@ struct ColumnLayout {
   }
 };
 
-/// The column of free parameter `k` of a spring or a flexion (a rest parameter is placed later,
-/// by placeRestColumns, once the stiffness' column is known). "" or why it is not linear.
-std::string placeSpringOrFlexionParameter(const BondType& type, const ParamRef& r, int k,
-                                          const EquationErrorOptions& options, TypeColumns* tc,
-                                          ColumnLayout* layout) {
-  const bool spring = type.kind == BondKind::kSpring;
-  const int rest_param = spring ? kRestLength : kRestAngle;
+/// The rest parameter a form solves for (kParamCount: none).
+ParamId restParamOf(LinearForm form) {
+  switch (form) {
+    case LinearForm::kPair: return kRestLength;
+    case LinearForm::kAngle: return kRestAngle;
+    case LinearForm::kDrag:
+    case LinearForm::kNone: break;
+  }
+  return kParamCount;
+}
+
+/// The column of free parameter `k` of a pair or an angle bond (a rest parameter is placed
+/// later, by placeRestColumns, once the stiffness' column is known). "" or why it is not linear.
+std::string placePairOrAngleParameter(const BondType& type, const ParamRef& r, int k,
+                                      const EquationErrorOptions& options, TypeColumns* tc,
+                                      ColumnLayout* layout) {
+  const LinearForm form = bondKindInfo(type.kind).linear_form;
+  const bool spring = form == LinearForm::kPair;
+  const int rest_param = restParamOf(form);
   if (r.param == kStiffness) {
     tc->k = layout->add(k, Role::kDirect);
   } else if (r.param == rest_param) {
@@ -153,22 +165,20 @@ std::string placeParameterColumns(const Model& model, const std::vector<ParamRef
     const BondType& type = model.bond_types[r.bond_type];
     TypeColumns& tc = layout->types[r.bond_type];
     std::string why = "'" + r.name + "' does not enter the forces linearly";
-    switch (type.kind) {
-      case BondKind::kSpring:
-      case BondKind::kFlexion:
-        why = placeSpringOrFlexionParameter(type, r, index, options, &tc, layout);
+    switch (bondKindInfo(type.kind).linear_form) {
+      case LinearForm::kPair:
+      case LinearForm::kAngle:
+        why = placePairOrAngleParameter(type, r, index, options, &tc, layout);
         break;
-      case BondKind::kViscosity:
+      case LinearForm::kDrag:
         if (r.param == kViscosity) {
           tc.viscosity = layout->add(index, Role::kDirect);
           why.clear();
         }
         break;
-      case BondKind::kMuscle:
-        // The activation is a network of other bonds' motion: every free muscle parameter is
-        // left to the evolution strategy and the refinements (docs/muscles.md).
-        break;
-      case BondKind::kFloor:  // conditional on contact: left to the search too
+      case LinearForm::kNone:
+        // Not linear (a muscle's activation is a network of other bonds' motion, a floor is
+        // conditional on contact): left to the evolution strategy and the refinements.
         break;
     }
     if (!why.empty()) return why;
@@ -186,18 +196,12 @@ void placeRestColumns(const Model& model, const std::vector<ParamRef>& refs, Col
   };
   for (size_t t = 0; t < model.bond_types.size(); ++t) {
     const BondType& type = model.bond_types[t];
-    int rest_param = -1;
-    switch (type.kind) {
-      case BondKind::kSpring: rest_param = kRestLength; break;
-      case BondKind::kFlexion: rest_param = kRestAngle; break;
-      case BondKind::kViscosity:
-      case BondKind::kMuscle:
-      case BondKind::kFloor: continue;  // no rest parameter solved for
-    }
+    const ParamId rest_param = restParamOf(bondKindInfo(type.kind).linear_form);
+    if (rest_param == kParamCount) continue;  // no rest parameter solved for
     const int rest = freeIndex(static_cast<int>(t), rest_param);
     if (rest < 0) continue;
     TypeColumns& tc = layout->types[t];
-    if (tc.stiffness_nl >= 0)  // linearised (checked by placeSpringOrFlexionParameter)
+    if (tc.stiffness_nl >= 0)  // linearised (checked by placePairOrAngleParameter)
       tc.rest_step = layout->add(rest, Role::kLinearized, -1, type.param(kRestLength).value);
     else if (tc.k >= 0)
       tc.product = layout->add(rest, Role::kProduct, tc.k);
@@ -259,9 +263,10 @@ class FrameEntries {
   std::vector<std::map<int, Eigen::Vector3d>> entries_;
 };
 
-/// A spring's columns at the frame's state: tension f along u, F_a += f u, F_b -= f u.
-void addSpringEntries(const Bond& b, const BondType& type, const TypeColumns& tc, const State& state,
-                      FrameEntries* entries) {
+/// A pair bond's columns at the frame's state (LinearForm::kPair): tension f along u,
+/// F_a += f u, F_b -= f u.
+void addPairEntries(const Bond& b, const BondType& type, const TypeColumns& tc, const State& state,
+                    FrameEntries* entries) {
   const int a = b.particles[0], c = b.particles[1];
   const Eigen::Vector3d d = state.x_m[c] - state.x_m[a];
   const double l = d.norm();
@@ -296,9 +301,10 @@ void addSpringEntries(const Bond& b, const BondType& type, const TypeColumns& tc
   pair(tc.damping_nl, s * std::fabs(s));
 }
 
-/// A flexion's columns: torque T about the angle, F_p = T grad_p(theta).
-void addFlexionEntries(const Bond& b, const BondType& type, const TypeColumns& tc, const State& state,
-                       FrameEntries* entries) {
+/// An angle bond's columns (LinearForm::kAngle): torque T about the angle,
+/// F_p = T grad_p(theta).
+void addAngleEntries(const Bond& b, const BondType& type, const TypeColumns& tc, const State& state,
+                     FrameEntries* entries) {
   const int a = b.particles[0], v = b.particles[1], c = b.particles[2];
   const double theta = flexionAngle(state.x_m[a], state.x_m[v], state.x_m[c]);
   // grad(theta) at each particle: the force of a law whose torque is exactly 1.
@@ -331,14 +337,13 @@ void addBondEntries(const Model& model, const ColumnLayout& layout, const State&
   for (const Bond& b : model.bonds) {
     const BondType& type = model.bond_types[b.type];
     const TypeColumns& tc = layout.types[b.type];
-    switch (type.kind) {
-      case BondKind::kSpring: addSpringEntries(b, type, tc, state, entries); break;
-      case BondKind::kFlexion: addFlexionEntries(b, type, tc, state, entries); break;
-      case BondKind::kViscosity:  // F = -c v
+    switch (bondKindInfo(type.kind).linear_form) {
+      case LinearForm::kPair: addPairEntries(b, type, tc, state, entries); break;
+      case LinearForm::kAngle: addAngleEntries(b, type, tc, state, entries); break;
+      case LinearForm::kDrag:  // F = -c v
         entries->add(b.particles[0], tc.viscosity, -state.v_mps[b.particles[0]]);
         break;
-      case BondKind::kMuscle:  // no unknowns: its force is in the known forces
-      case BondKind::kFloor:
+      case LinearForm::kNone:  // no unknowns: its force is in the known forces
         break;
     }
   }

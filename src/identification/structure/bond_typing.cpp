@@ -85,37 +85,31 @@ std::vector<Cluster> clusterBonds(const Solved& solved, int first_candidate_type
 }
 
 /// The shared type of `cluster`: its first member's layout (which parameters are free) at the
-/// cluster's mean values, named by kind (s00.., f00.., v00..; `of_kind` counts per kind).
-BondType clusterType(const Model& m, const Cluster& cluster, int first_candidate_type, int of_kind[3]) {
+/// cluster's mean values (read back by the kind's linear form), named by the kind's candidate
+/// prefix (s00.., f00.., v00..; `of_kind` counts per kind, indexed by BondKind).
+BondType clusterType(const Model& m, const Cluster& cluster, int first_candidate_type,
+                     std::vector<int>* of_kind) {
   BondType type = m.bond_types[first_candidate_type + cluster.first_member];
   const BondValues mu = cluster.mean();
-  const char* prefix = "s";
-  int* counter = &of_kind[0];
-  switch (type.kind) {
-    case BondKind::kSpring:
-    case BondKind::kFlexion: {
-      const bool spring = type.kind == BondKind::kSpring;
-      if (!spring) {
-        prefix = "f";
-        counter = &of_kind[1];
-      }
+  const BondKindInfo& info = bondKindInfo(type.kind);
+  switch (info.linear_form) {
+    case LinearForm::kPair:
+    case LinearForm::kAngle:
       type.param(kStiffness).value = mu[0];
-      type.param(spring ? kRestLength : kRestAngle).value = mu[1];
+      type.param(info.linear_form == LinearForm::kPair ? kRestLength : kRestAngle).value = mu[1];
       for (int o = 0; o < 3; ++o)
         if (cluster.terms & (1u << o)) type.param(kOptionalTerms[o]).value = mu[2 + o];
       break;
-    }
-    case BondKind::kViscosity:
-      prefix = "v";
-      counter = &of_kind[2];
+    case LinearForm::kDrag:
       type.param(kViscosity).value = mu[0];
       break;
-    case BondKind::kMuscle:  // never a candidate: candidates are springs, flexions, drags
-    case BondKind::kFloor:
+    case LinearForm::kNone:  // never a candidate: candidates are solved by the equation error
       break;
   }
+  int& counter = (*of_kind)[static_cast<size_t>(type.kind)];
   char name[32];
-  std::snprintf(name, sizeof(name), "%s%02d", prefix, (*counter)++);
+  std::snprintf(name, sizeof(name), "%s%02d", info.candidate_prefix ? info.candidate_prefix : "?",
+                counter++);
   type.name = name;
   return type;
 }
@@ -189,9 +183,9 @@ Model typeBonds(const Solved& solved, int first_candidate_type, double sigmas, i
   // The typed model: base types, then one type per cluster.
   Model typed = m;
   typed.bond_types.resize(first_candidate_type);
-  int of_kind[3] = {0, 0, 0};  // numbering per kind: s00.., f00.., v00..
+  std::vector<int> of_kind(allBondKinds().size(), 0);  // numbering per kind: s00.., f00.., v00..
   for (const Cluster& cluster : clusters)
-    typed.bond_types.push_back(clusterType(m, cluster, first_candidate_type, of_kind));
+    typed.bond_types.push_back(clusterType(m, cluster, first_candidate_type, &of_kind));
   // The kept candidate types of `m` follow the base types in kept order.
   for (Bond& b : typed.bonds)
     if (b.type >= first_candidate_type)
