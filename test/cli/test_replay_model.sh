@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # replay.launch shows an identified model as it is: with initial_model:=FILE (here an identified
 # model with an anchor, a fixed particle without a marker) and estimate:=false, over model:= a
-# file without values, the node replays a bag and never changes the values: ~export_model gives
+# file without values, the node replays a capture (a .trc file given as bag:=, read directly)
+# and never changes the values: ~export_model gives
 # exactly FILE's values, ~markers draws the model's prediction, and ~stats counts the anchor's
 # samples as model_only, not as occluded markers (the capture has no gap). Needs a ROS master:
 # starts its own roscore on a free port and stops it by its PID.
@@ -27,7 +28,7 @@ cleanup() {
 }
 trap cleanup EXIT
 
-"$bin/simulate" --scene paper_object --frames 150 --out "$tmp/data.bag" --truth-out "$tmp/truth.yaml" >/dev/null
+"$bin/simulate" --scene paper_object --frames 150 --out "$tmp/data.trc" --truth-out "$tmp/truth.yaml" >/dev/null
 # The identified model: the truth's values, and an anchor the capture has no marker for.
 sed 's/^particles:$/particles:\n  - {name: anchor, mass: 1, position: [0, 0, -5], fixed: true}/' \
   "$tmp/truth.yaml" >"$tmp/identified.yaml"
@@ -38,7 +39,7 @@ for _ in $(seq 150); do rosparam get /rosdistro >/dev/null 2>&1 && break; sleep 
 rosparam get /rosdistro >/dev/null || { echo "roscore did not come up"; cat "$tmp/roscore.log"; exit 1; }
 
 export ROSCONSOLE_STDOUT_LINE_BUFFERED=1
-roslaunch motion_model_estimation replay.launch model:="$tmp/free.yaml" bag:="$tmp/data.bag" \
+roslaunch motion_model_estimation replay.launch model:="$tmp/free.yaml" bag:="$tmp/data.trc" \
   initial_model:="$tmp/identified.yaml" estimate:=false </dev/null >"$tmp/launch.log" 2>&1 &
 launch=$!
 for _ in $(seq 1200); do
@@ -49,6 +50,7 @@ done
 grep -q "bag replay finished" "$tmp/launch.log" ||
   { echo "the replay did not finish within 120 s:"; cat "$tmp/launch.log"; exit 1; }
 grep -q "is shown as it is" "$tmp/launch.log" || { echo "no 'shown as it is' line:"; cat "$tmp/launch.log"; exit 1; }
+grep -q "replaying 150 frames of $tmp/data.trc" "$tmp/launch.log" || { echo "the .trc file was not replayed:"; cat "$tmp/launch.log"; exit 1; }
 
 # The values shown are the file's, every one unchanged (same writer, same digits).
 timeout 60 rosservice call /estimator/export_model "path: 'shown.yaml'" >"$tmp/export.log"
