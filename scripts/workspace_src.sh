@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # Sourced by scripts/build: the package's entry in the catkin workspace's src/.
 #   workspace_src REPOSITORY_ROOT WORKSPACE_SRC_DIR
 # makes WORKSPACE_SRC_DIR/motion_model_estimation a directory of relative links to the
@@ -29,6 +30,6 @@ workspace_src() {
   done
   for name in "$pkg"/* "$pkg"/.[!.]*; do
     [ -L "$name" ] || continue
-    [ -e "$name" ] && grep -qxF "$(basename "$name")" <<<"$names" || rm -f "$name"
+    if [ ! -e "$name" ] || ! grep -qxF "$(basename "$name")" <<<"$names"; then rm -f "$name"; fi
   done
 }
