@@ -84,6 +84,10 @@ void readFilesAndStructure(const ParameterSource& params, EstimatorNodeOptions* 
           "~autosave_period_sec must be > 0");
   params.get("initial_model", &o.initial_model);
   params.get("select_structure", &o.select_structure);
+  params.get("estimate_values", &o.estimator.estimate_values);
+  require(o.estimator.estimate_values || !o.select_structure,
+          "~estimate_values false shows the model as it is: it cannot be combined with "
+          "~select_structure");
   params.get("structure_report_path", &o.structure_report_path);
   require(!o.structure_report_path.empty(), "~structure_report_path must not be empty");
   params.get("structure_max_time_sec", &o.structure_max_time_s);

@@ -8,6 +8,9 @@ std::string formatStats(const EstimatorStats& s) {
   std::string text =
       "accepted=" + std::to_string(s.input.accepted) + " rejected=" + std::to_string(s.rejected) +
       " occluded=" + std::to_string(s.input.occluded_samples) +
+      (s.input.model_only_samples > 0
+           ? " model_only=" + std::to_string(s.input.model_only_samples)
+           : std::string()) +
       " rejected_time=" + std::to_string(s.input.rejected_time) +
       " rejected_size=" + std::to_string(s.input.rejected_size) +
       " clock_jumps=" + std::to_string(s.clock_jumps) +

@@ -1,5 +1,7 @@
 #include "motion_model_estimation/live/marker_name_map.h"
 
+#include "motion_model_estimation/identification/online/online_estimator.h"
+
 #include <unordered_map>
 #include <utility>
 
@@ -55,7 +57,9 @@ MappedFrame MarkerNameMap::map(const std::vector<std::string>& names,
   out.unknown = cached_unknown_;
   out.example_unknown = cached_example_unknown_;
   out.positions_m.assign(particles_.size(), Eigen::Vector3d::Zero());
-  out.occluded.assign(particles_.size(), 1);  // particles absent from the frame are occluded
+  // A particle absent from the frame has no marker in it: the estimator tells a point of the
+  // model only (a fixed particle, e.g. an anchor) from a hidden marker.
+  out.occluded.assign(particles_.size(), OnlineEstimator::kNoMarker);
   for (size_t k = 0; k < names.size(); ++k) {
     const int i = cached_index_[k];
     if (i < 0) continue;

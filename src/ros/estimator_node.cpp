@@ -17,6 +17,7 @@
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/io/model_yaml.h"
 #include "motion_model_estimation/io/path_confinement.h"
+#include "motion_model_estimation/io/trajectory_io.h"
 #include "motion_model_estimation/live/estimator_stats.h"
 #include "motion_model_estimation/live/replay_pacing.h"
 #include "motion_model_estimation/pipeline/result_metadata.h"
@@ -100,6 +101,10 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
     estimator_options.wait_for_structure = true;
   }
   estimator_ = std::make_unique<OnlineEstimator>(model, estimator_options);
+  if (!estimator_options.estimate_values)
+    ROS_INFO("estimator_node: ~estimate_values is false: the model of %s is shown as it is, its "
+             "values are never changed",
+             (estimator_options.resume_from_model_values ? options_.initial_model : options_.model_path).c_str());
   names_.setParticles(estimator_->particleNames());
   fixed_frame_ = options_.fixed_frame.empty() ? model.frame_id : options_.fixed_frame;
   marker_style_.frame_id = fixed_frame_;
@@ -319,7 +324,16 @@ void EstimatorNode::structureLoop() {
 void EstimatorNode::bagLoop() {
   Trajectory bag;
   try {
-    bag = readBag(options_.bag, options_.bag_topic);
+    // A capture file is replayed as its bag would be (convert's): same frames, times and gaps.
+    const std::string extension = fileExtension(options_.bag);
+    if (extension == ".trc" || extension == ".c3d") {
+      std::vector<std::string> warnings;
+      bag = readTrajectoryFile(options_.bag, &warnings);
+      for (const std::string& warning : warnings)
+        ROS_WARN("estimator_node: %s: %s", options_.bag.c_str(), warning.c_str());
+    } else {
+      bag = readBag(options_.bag, options_.bag_topic);
+    }
   } catch (const InputError& e) {
     ROS_FATAL("estimator_node: ~bag: %s", e.what());
     ros::shutdown();
@@ -406,7 +420,9 @@ bool EstimatorNode::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Resp
   estimator_->reset(false);
   last_published_generation_ = 0;
   res.success = true;
-  res.message = "population cleared; identification restarts on the current window";
+  res.message = options_.estimator.estimate_values
+                    ? "population cleared; identification restarts on the current window"
+                    : "nothing to identify (~estimate_values is false): the model is shown as it is";
   if (structure_) {
     structure_->request();
     res.message += "; the structure is chosen again on the next full window";

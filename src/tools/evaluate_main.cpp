@@ -72,8 +72,10 @@ int run(int argc, char** argv) {
                             "' has no value (evaluate needs an identified model, e.g. identify's --out)");
   const int history = static_cast<int>(args.getInt("history", 0, 0, 100000000));
   int history_kept = 0;
-  const mme::Trajectory trajectory = mme::loadModelTrajectory(
-      "evaluate", args.get("trajectory"), args.get("topic"), args, &model, history, &history_kept);
+  int model_only = 0;
+  const mme::Trajectory trajectory =
+      mme::loadModelTrajectory("evaluate", args.get("trajectory"), args.get("topic"), args, &model,
+                               history, &history_kept, &model_only);
   mme::PredictionReport report;
   try {
     report = mme::evaluatePredictions(model, trajectory, horizons, 10.0, std::max(history_kept, 2));
@@ -83,10 +85,16 @@ int run(int argc, char** argv) {
                           " (--history H reads the H frames before --first-frame to place them)");
   }
 
-  std::printf("evaluate: %d frames x %d markers at %g Hz (%d of them history), %d prediction "
+  // The model's particles without a marker in the file (anchors) are no markers of the capture.
+  const std::string points_of_the_model_only =
+      model_only > 0 ? " (and " + std::to_string(model_only) +
+                           " fixed particle(s) of the model without a marker, e.g. anchors)"
+                     : "";
+  std::printf("evaluate: %d frames x %d markers%s at %g Hz (%d of them history), %d prediction "
               "starts (%ld particle starts filled from their neighbours)\n",
-              trajectory.numFrames(), trajectory.numMarkers(), model.frame_rate_hz, history_kept,
-              report.starts, report.filled);
+              trajectory.numFrames(), trajectory.numMarkers() - model_only,
+              points_of_the_model_only.c_str(), model.frame_rate_hz, history_kept, report.starts,
+              report.filled);
   std::printf("%-8s %-22s %14s %10s\n", "horizon", "predictor", "rms_m", "samples");
   std::ostringstream csv;
   csv << "horizon,predictor,rms_m\n";

@@ -32,13 +32,15 @@ Trajectory readToolTrajectory(const char* tool, const std::string& path, const s
 }
 
 Trajectory loadModelTrajectory(const char* tool, const std::string& path, const std::string& topic,
-                               const CliArgs& args, Model* model, int history, int* history_kept) {
+                               const CliArgs& args, Model* model, int history, int* history_kept,
+                               int* model_only) {
   return fitTrajectoryToModel(tool, path, readToolTrajectory(tool, path, topic), args, model, history,
-                              history_kept);
+                              history_kept, model_only);
 }
 
 Trajectory fitTrajectoryToModel(const char* tool, const std::string& path, const Trajectory& data,
-                                const CliArgs& args, Model* model, int history, int* history_kept) {
+                                const CliArgs& args, Model* model, int history, int* history_kept,
+                                int* model_only) {
   std::vector<std::string> names;
   for (const Particle& p : model->particles) names.push_back(p.name);
   std::vector<std::string> missing;
@@ -54,6 +56,7 @@ Trajectory fitTrajectoryToModel(const char* tool, const std::string& path, const
                      "); the file's markers: " + nameList(data.marker_names) +
                      "; the model's particles: " + nameList(names) +
                      " (a model file's particle names must be the capture's marker names)");
+  if (model_only) *model_only = static_cast<int>(missing.size());
   const int total = trajectory.numFrames();
   const int first = static_cast<int>(args.getInt("first-frame", 0, 0, total - 1));
   long count = args.getInt("frames", total - first, 1, total - first);

@@ -2,8 +2,8 @@
 # evaluate: the identified paper_object predicts held-out frames (not the ones it was identified
 # on) better than the three model-free guesses at 1, 5 and 10 frames; the CSV has the columns
 # horizon,predictor,rms_m and one row per horizon and predictor; a marker hidden through the
-# judged frames is placed from --history frames; a fixed particle needs no marker, a free one
-# does; bad options give exit 2.
+# judged frames is placed from --history frames; a fixed particle needs no marker (and is not
+# counted as one), a free one does; bad options give exit 2.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/../.." && pwd)
 source "$here/scripts/env.sh"
@@ -43,8 +43,11 @@ sed 's/^particles:$/particles:\n  - {name: ground, mass: 1, position: [0, 0, -5]
   "$tmp/identified.yaml" >"$tmp/anchored.yaml"
 grep -q "name: ground" "$tmp/anchored.yaml"
 "$bin/evaluate" --model "$tmp/anchored.yaml" --trajectory "$tmp/data.trc" --first-frame 100 \
-  --csv "$tmp/anchored.csv" >/dev/null
+  --csv "$tmp/anchored.csv" >"$tmp/anchored.log"
 cmp "$tmp/out.csv" "$tmp/anchored.csv" || { echo "a markerless fixed particle changed the figures"; exit 1; }
+# ... and it is no marker of the capture: still 15 markers, the anchor said apart.
+grep -q "x 15 markers (and 1 fixed particle(s) of the model without a marker, e.g. anchors) at 100 Hz" \
+  "$tmp/anchored.log" || { echo "anchor counted as a marker:"; cat "$tmp/anchored.log"; exit 1; }
 sed 's/^particles:$/particles:\n  - {name: ghost, mass: 1, position: [0, 0, -5], fixed: false}/' \
   "$tmp/identified.yaml" >"$tmp/ghost.yaml"
 

@@ -112,6 +112,18 @@ TEST(EstimatorNodeOptions, StructureSelectionNeedsALongEnoughWindow) {
   EXPECT_EQ(refusal(s), "");
 }
 
+// ~estimate_values: on by default; off shows the model as it is, which excludes choosing a
+// structure.
+TEST(EstimatorNodeOptions, EstimateValuesOffShowsTheModelAndExcludesStructureSelection) {
+  MapSource s = withModel();
+  EXPECT_TRUE(mme::readEstimatorNodeOptions(s).estimator.estimate_values);
+  s.values["estimate_values"] = false;
+  EXPECT_FALSE(mme::readEstimatorNodeOptions(s).estimator.estimate_values);
+  s.values["select_structure"] = true;
+  EXPECT_EQ(refusal(s), "~estimate_values false shows the model as it is: it cannot be combined with "
+                        "~select_structure");
+}
+
 TEST(EstimatorNodeOptions, ThePaperPresetAndWhatOverridesIt) {
   MapSource s = withModel();
   s.values["preset"] = std::string("paper");

@@ -19,6 +19,18 @@ TEST(EstimatorStats, CountersOnlyBeforeAnyUpdateOrMarkers) {
             "updates=0 markers_published=0");
 }
 
+// Samples of model particles without a marker (anchors) are not occluded markers: they have a
+// field of their own, shown once there are some.
+TEST(EstimatorStats, ModelOnlySamplesAreApartFromTheOccludedOnes) {
+  mme::EstimatorStats s;
+  s.input.accepted = 121;
+  s.input.occluded_samples = 2;
+  s.input.model_only_samples = 363;
+  EXPECT_EQ(mme::formatStats(s),
+            "accepted=121 rejected=0 occluded=2 model_only=363 rejected_time=0 rejected_size=0 "
+            "clock_jumps=0 updates=0 markers_published=0");
+}
+
 TEST(EstimatorStats, LatencyAndUpdateGapFieldsOnceTheyExist) {
   mme::EstimatorStats s;
   s.input.accepted = 1;

@@ -1,5 +1,5 @@
 // MarkerNameMap: input markers land on their particles in any order, absent particles are
-// occluded, unknown names are ignored and reported once per name list, a frame without any
+// flagged as having no marker (kNoMarker, not a plain occlusion), unknown names are ignored and reported once per name list, a frame without any
 // known name is refused, and a new particle list rebuilds the index.
 #include <gtest/gtest.h>
 
@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "motion_model_estimation/live/marker_name_map.h"
+#include "motion_model_estimation/identification/online/online_estimator.h"
 
 namespace {
 
@@ -30,12 +31,13 @@ TEST(MarkerNameMap, PlacesMarkersInParticleOrderWhateverTheInputOrder) {
   EXPECT_EQ(f.occluded, (std::vector<uint8_t>{1, 0, 0}));  // a's flag followed it
 }
 
-TEST(MarkerNameMap, ParticlesAbsentFromTheFrameAreOccludedAtTheOrigin) {
+TEST(MarkerNameMap, ParticlesAbsentFromTheFrameHaveNoMarkerAtTheOrigin) {
   mme::MarkerNameMap map = abc();
   const mme::MappedFrame f = map.map({"b"}, {V(2, 2, 2)}, {});
   EXPECT_TRUE(f.rejection.empty());
   EXPECT_EQ(f.matched, 1u);
-  EXPECT_EQ(f.occluded, (std::vector<uint8_t>{1, 0, 1}));
+  const uint8_t none = mme::OnlineEstimator::kNoMarker;
+  EXPECT_EQ(f.occluded, (std::vector<uint8_t>{none, 0, none}));
   EXPECT_EQ(f.positions_m[0], V::Zero());
   EXPECT_EQ(f.positions_m[1], V(2, 2, 2));
   EXPECT_EQ(f.positions_m[2], V::Zero());

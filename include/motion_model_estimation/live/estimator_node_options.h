@@ -23,7 +23,7 @@ enum class InputType {
 struct EstimatorNodeOptions {
   std::string model_path;
   InputType input_type = InputType::kMarkers;
-  std::string bag;                     ///< read this bag instead of subscribing
+  std::string bag;                     ///< read this bag (or .trc/.c3d capture) instead of subscribing
   std::string bag_topic;               ///< MarkerFrame topic in the bag ("" = the only one)
   double bag_rate = 0.0;               ///< x real time; 0 = as fast as the estimator keeps up
   std::string fixed_frame;             ///< "" = the model's frame_id

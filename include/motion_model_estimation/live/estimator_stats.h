@@ -29,7 +29,8 @@ struct EstimatorStats {
 };
 
 /// "accepted=N rejected=N occluded=N rejected_time=N rejected_size=N clock_jumps=N updates=N
-/// markers_published=N", then "latency_p50_ms=X latency_p99_ms=X" once markers were drawn, then
+/// markers_published=N" (occluded: hidden markers; after it "model_only=N" when the input had no
+/// marker for fixed particles of the model, e.g. anchors: samples masked, not occluded), then "latency_p50_ms=X latency_p99_ms=X" once markers were drawn, then
 /// "max_update_gap_ms=X max_update_gap_10s_ms=X" once an update happened (X with 3 decimals),
 /// then, once a prediction report exists, per horizon K and predictor P (its CSV name: model,
 /// constant_velocity, constant_acceleration, gravity_only) "predict<K>_<P>_mm=X" (RMS per

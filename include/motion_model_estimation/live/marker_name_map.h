@@ -15,7 +15,8 @@ namespace mme {
 /// One frame in the model's particle order, and what the mapping found on the way.
 struct MappedFrame {
   std::vector<Eigen::Vector3d> positions_m;  ///< [m] particle order (empty names: input order)
-  std::vector<uint8_t> occluded;             ///< 1 = occluded or absent from the frame
+  /// 0 = seen, 1 = occluded, OnlineEstimator::kNoMarker = absent from the frame
+  std::vector<uint8_t> occluded;
   bool names_changed = false;   ///< the name list differs from the previous frame's (index rebuilt)
   size_t unknown = 0;           ///< input names that are no model particle (ignored)
   std::string example_unknown;  ///< the first of them ("" when none)
@@ -42,7 +43,7 @@ class MarkerNameMap {
   const std::vector<std::string>& particles() const { return particles_; }
 
   /// Places marker `names[k]` (position `positions_m[k]`, flag `occluded[k]`) at its particle's
-  /// index; particles absent from the frame are occluded at (0,0,0). Unknown names are ignored;
+  /// index; particles absent from the frame are at (0,0,0), flagged kNoMarker. Unknown names are ignored;
   /// when two markers share a name the later one wins. Empty `names`: the input is already in
   /// particle order and passes through unchanged (the estimator checks its size). `occluded`
   /// may be empty (nothing occluded); otherwise all three have the same length.

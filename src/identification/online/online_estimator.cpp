@@ -25,6 +25,8 @@ std::string validateOptions(const OnlineEstimatorOptions& o) {
   if (!(o.update_budget_s > 0.0) || !std::isfinite(o.update_budget_s))
     return "update_budget_s must be > 0";
   if (!(o.refine_max_s > 0.0) || !std::isfinite(o.refine_max_s)) return "refine_max_s must be > 0";
+  if (!o.estimate_values && o.wait_for_structure)
+    return "estimate_values false shows a given model: it cannot wait for a structure to be chosen";
   return validateOptions(o.es);
 }
 
@@ -34,11 +36,26 @@ namespace {
 constexpr double kClockJumpS = 1.0;
 constexpr double kClockJumpFrameIntervals = 10.0;
 
-void checkModel(const Model& model, bool allow_no_free_parameter) {
+void checkModel(const Model& model, const OnlineEstimatorOptions& options) {
   const std::string bad = validateModel(model);
   if (!bad.empty()) throw InputError("model: " + bad);
-  if (!allow_no_free_parameter && freeParameters(model).empty())
+  if (!options.estimate_values) {
+    // Shown as it is: every value must be there (an identified model), none is searched.
+    for (const ParamRef& ref : freeParameters(model))
+      if (!paramOf(model, ref).has_value)
+        throw InputError("model: parameter '" + ref.name +
+                         "' has no value; a model shown as it is (estimate_values false) must be "
+                         "an identified one (e.g. identify's --out)");
+    return;
+  }
+  if (!options.wait_for_structure && freeParameters(model).empty())
     throw InputError("model: no free parameter to identify");
+}
+
+std::vector<uint8_t> fixedFlags(const Model& model) {
+  std::vector<uint8_t> fixed;
+  for (const Particle& p : model.particles) fixed.push_back(p.fixed ? 1 : 0);
+  return fixed;
 }
 
 /// The search for a new model: the refinement runs beside the generations (startRefinement), not
@@ -195,8 +212,9 @@ OnlineEstimator::OnlineEstimator(const Model& model, const OnlineEstimatorOption
     : model_(model), options_(options) {
   const std::string bad = validateOptions(options);
   if (!bad.empty()) throw InputError(bad);
-  checkModel(model, options_.wait_for_structure);
+  checkModel(model, options_);
   for (const Particle& p : model.particles) names_.push_back(p.name);
+  fixed_ = fixedFlags(model);
 }
 
 std::string OnlineEstimator::addFrame(double time_s, const std::vector<Eigen::Vector3d>& positions_m,
@@ -229,10 +247,14 @@ std::string OnlineEstimator::addFrame(double time_s, const std::vector<Eigen::Ve
   std::vector<uint8_t> mask(names_.size(), 0);
   std::vector<Eigen::Vector3d> x = positions_m;
   for (size_t i = 0; i < x.size(); ++i) {
-    if ((!occluded.empty() && occluded[i]) || !x[i].allFinite()) {
+    const uint8_t flag = occluded.empty() ? 0 : occluded[i];
+    if (flag != 0 || !x[i].allFinite()) {
       mask[i] = 1;
       x[i].setZero();
-      ++counters_.occluded_samples;
+      if (flag == kNoMarker && fixed_[i])
+        ++counters_.model_only_samples;  // a point of the model only: no marker to hide
+      else
+        ++counters_.occluded_samples;
     }
   }
   times_s_.push_back(time_s);
@@ -244,6 +266,7 @@ std::string OnlineEstimator::addFrame(double time_s, const std::vector<Eigen::Ve
     occluded_.pop_front();
   }
   ++counters_.accepted;
+  ++frames_added_;
   return "";
 }
 
@@ -328,10 +351,12 @@ Trajectory OnlineEstimator::rollout(const Model& model, const Trajectory& window
 bool OnlineEstimator::update() {
   std::lock_guard<std::mutex> lock(update_mutex_);
   Trajectory window_data;
+  uint64_t frames_added = 0;
   {
     std::lock_guard<std::mutex> frames_lock(frames_mutex_);
     if (static_cast<int>(times_s_.size()) < options_.min_frames) return false;
     window_data = snapshotLocked();
+    frames_added = frames_added_;
   }
   Model model;
   uint64_t version = 0;
@@ -346,8 +371,10 @@ bool OnlineEstimator::update() {
     es_.reset();
     last_refine_generation_ = -1;
     output_error_ = OutputErrorResult();
+    held_updates_ = 0;
   }
   es_version_ = version;
+  if (!options_.estimate_values) return holdModelValues(model, window_data, frames_added, version);
   if (freeParameters(model).empty()) return false;  // waiting for a structure (replaceModel)
   // Live streams carry their own clock: the model's rate wins only when it states one.
   if (!(model.frame_rate_hz > 0.0)) model.frame_rate_hz = window_data.frame_rate_hz;
@@ -418,6 +445,39 @@ bool OnlineEstimator::update() {
   return true;
 }
 
+bool OnlineEstimator::holdModelValues(Model model, const Trajectory& window, uint64_t frames_added,
+                                      uint64_t version) {
+  if (held_updates_ > 0 && frames_added == held_frames_) return false;  // nothing new to judge
+  if (!(model.frame_rate_hz > 0.0)) model.frame_rate_hz = window.frame_rate_hz;
+  Estimate e;
+  e.valid = true;
+  e.generation = held_updates_ + 1;  // counts the held estimates: each one is published
+  e.window_frames = static_cast<uint32_t>(window.numFrames());
+  e.window_start_time_s = window.times_s.front();
+  e.window_end_time_s = window.times_s.back();
+  for (const ParamRef& ref : freeParameters(model)) {
+    e.parameter_names.push_back(ref.name);
+    e.values.push_back(paramOf(model, ref).value);
+  }
+  e.std_devs.assign(e.values.size(), std::numeric_limits<double>::quiet_NaN());  // not estimated
+  const ShortTermCost cost(model, window);
+  if (cost.termCount() > 0) {
+    std::vector<double> values;
+    for (const ParamRef& ref : cost.freeParameters()) values.push_back(paramOf(model, ref).value);
+    e.global_cost = cost.evaluate(values, &e.local_costs);
+    e.evaluations = 1;
+  }
+  e.stable = staysBounded(model, window,
+                          static_cast<int>(options_.stability_rollout_factor * window.numFrames()));
+  std::lock_guard<std::mutex> model_lock(model_mutex_);
+  if (model_version_ != version) return false;
+  held_frames_ = frames_added;
+  ++held_updates_;
+  std::lock_guard<std::mutex> estimate_lock(estimate_mutex_);
+  estimate_ = std::move(e);
+  return true;
+}
+
 bool OnlineEstimator::isClockJump(double step_s, double interval_s) {
   if (step_s >= 0.0) return step_s > std::max(kClockJumpS, kClockJumpFrameIntervals * interval_s);
   return -step_s > (interval_s > 0.0 ? kClockJumpFrameIntervals * interval_s : kClockJumpS);
@@ -461,7 +521,7 @@ void OnlineEstimator::reset(bool clear_window) {
 }
 
 void OnlineEstimator::replaceModel(const Model& model) {
-  checkModel(model, options_.wait_for_structure);
+  checkModel(model, options_);
   std::vector<std::string> names;
   for (const Particle& p : model.particles) names.push_back(p.name);
   std::lock_guard<std::mutex> lock(model_mutex_);
@@ -473,6 +533,7 @@ void OnlineEstimator::replaceModel(const Model& model) {
       occluded_.clear();
       names_ = names;
     }
+    fixed_ = fixedFlags(model);
   }
   model_ = model;
   ++model_version_;  // the next update() starts a new population on this model

@@ -201,3 +201,69 @@ TEST(OnlineEstimator, AnAnchorFarOffTheBodyIsNotAnInstability) {
 }
 
 }  // namespace
+
+namespace {
+
+/// Frame t of `w` as addFrame takes it.
+std::vector<Eigen::Vector3d> frameOf(const mme::Trajectory& w, int t) {
+  const int n = w.numMarkers();
+  return std::vector<Eigen::Vector3d>(w.positions_m.begin() + t * n, w.positions_m.begin() + (t + 1) * n);
+}
+
+// An input without a marker for a fixed particle (the anchor: a point of the model only) is not
+// an occlusion, so ~stats does not count it as one; a free particle without a marker is a hidden
+// marker, and a flagged occlusion of any particle is one.
+TEST(OnlineEstimator, AFixedParticleWithoutAMarkerIsNotCountedAsOccluded) {
+  AnchoredFixture f;
+  mme::OnlineEstimator estimator(mme::test::withoutValues(f.anchored), mme::OnlineEstimatorOptions());
+  const uint8_t none = mme::OnlineEstimator::kNoMarker;
+  for (int t = 0; t < 10; ++t)
+    ASSERT_EQ(estimator.addFrame(f.motion.times_s[t], frameOf(f.motion, t), {0, 0, 0, 0, 0, none}), "");
+  mme::InputCounters c = estimator.counters();
+  EXPECT_EQ(c.occluded_samples, 0u);
+  EXPECT_EQ(c.model_only_samples, 10u);
+  EXPECT_TRUE(estimator.window().isOccluded(9, 5));  // masked all the same
+  ASSERT_EQ(estimator.addFrame(f.motion.times_s[10], frameOf(f.motion, 10), {none, 0, 0, 0, 0, 1}), "");
+  c = estimator.counters();
+  EXPECT_EQ(c.occluded_samples, 2u);  // the free particle without a marker, the flagged anchor
+  EXPECT_EQ(c.model_only_samples, 10u);
+}
+
+// estimate_values false: an identified model is shown as it is. Each update with a new frame
+// publishes the model's own values (judged on the window: cost, stability), none is searched;
+// without a new frame there is nothing to publish. A model without values is refused.
+TEST(OnlineEstimator, WithEstimateValuesOffTheModelsValuesAreShownUnchanged) {
+  AnchoredFixture f;
+  mme::OnlineEstimatorOptions options;
+  options.window_frames = 30;
+  options.min_frames = 10;
+  options.estimate_values = false;
+  mme::OnlineEstimator estimator(f.anchored, options);
+  const std::vector<double> values = mme::getValues(f.anchored, mme::freeParameters(f.anchored));
+  const std::vector<uint8_t> mask = {0, 0, 0, 0, 0, mme::OnlineEstimator::kNoMarker};
+  for (int t = 0; t < 9; ++t) ASSERT_EQ(estimator.addFrame(f.window.times_s[t], frameOf(f.window, t), mask), "");
+  EXPECT_FALSE(estimator.update());  // fewer than min_frames
+  for (int t = 9; t < 40; ++t) {
+    ASSERT_EQ(estimator.addFrame(f.window.times_s[t], frameOf(f.window, t), mask), "");
+    ASSERT_TRUE(estimator.update()) << t;
+    EXPECT_FALSE(estimator.update()) << t;  // the same frames again
+  }
+  const mme::Estimate e = estimator.estimate();
+  ASSERT_TRUE(e.valid);
+  EXPECT_EQ(e.generation, 31u);  // one held estimate per new frame
+  EXPECT_EQ(e.values, values);   // exactly the file's values
+  EXPECT_EQ(e.window_frames, 30u);
+  EXPECT_LT(e.global_cost, 1e-12);  // the true model on its own noise-free motion
+  EXPECT_TRUE(e.stable);
+  const mme::Model shown = estimator.currentModel();
+  EXPECT_EQ(mme::getValues(shown, mme::freeParameters(shown)), values);
+
+  try {
+    mme::OnlineEstimator refused(f.search, options);
+    FAIL() << "a model without values was accepted";
+  } catch (const mme::InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("has no value"), std::string::npos) << error.what();
+  }
+}
+
+}  // namespace

@@ -50,6 +50,10 @@ struct OnlineEstimatorOptions {
   /// Accept a model with no free parameter (the particles alone, while a structure is being
   /// chosen): frames are collected and update() returns false until replaceModel() gives one.
   bool wait_for_structure = false;
+  /// false: the model is shown as it is, nothing is searched. The model must hold a value for
+  /// every free parameter (an identified model); update() publishes those values, judged on the
+  /// current window (cost, stability), once per new frame and never changes them.
+  bool estimate_values = true;
   EsOptions es = onlineEsOptions();  ///< population, seed, threads, operators
 };
 
@@ -85,7 +89,10 @@ struct InputCounters {
   uint64_t accepted = 0;
   uint64_t rejected_size = 0;      ///< wrong number of positions
   uint64_t rejected_time = 0;      ///< time not after the previous frame (reordered, duplicated)
-  uint64_t occluded_samples = 0;   ///< occluded or non-finite samples masked
+  uint64_t occluded_samples = 0;   ///< occluded or non-finite samples of markers, masked
+  /// Samples of fixed particles the stream has no marker for (kNoMarker: a point of the model
+  /// only, such as a sensor muscle's anchor), masked but not occluded markers.
+  uint64_t model_only_samples = 0;
 };
 
 /// The refinement of the best individual (the engine's periodic one) runs beside the generations
@@ -98,8 +105,13 @@ class OnlineEstimator {
   OnlineEstimator(const Model& model, const OnlineEstimatorOptions& options);
   ~OnlineEstimator();
 
+  /// addFrame's `occluded` value for a particle the input has no marker of (MarkerNameMap): a
+  /// fixed particle then is a point of the model only (counted in model_only_samples), a free
+  /// one a hidden marker (counted as occluded).
+  static constexpr uint8_t kNoMarker = 2;
   /// Adds a frame in the model's particle order (thread-safe). Returns an empty string when
-  /// accepted, else why it was rejected. Non-finite positions are masked as occluded.
+  /// accepted, else why it was rejected. Non-finite positions are masked as occluded;
+  /// `occluded` holds 0 (seen), 1 (occluded) or kNoMarker per particle, or is empty.
   std::string addFrame(double time_s, const std::vector<Eigen::Vector3d>& positions_m,
                        const std::vector<uint8_t>& occluded);
   /// Runs generations_per_update generations on the current window (call from one worker
@@ -146,6 +158,15 @@ class OnlineEstimator {
   InputCounters counters_;
 
   std::vector<std::string> names_;  // guarded by frames_mutex_
+  std::vector<uint8_t> fixed_;      // per particle, 1 = fixed (guarded by frames_mutex_)
+  uint64_t frames_added_ = 0;       // accepted frames, ever (guarded by frames_mutex_)
+  uint64_t held_frames_ = 0;        // frames_added_ at the last held estimate (update_mutex_)
+  uint32_t held_updates_ = 0;       // held estimates made for this model (update_mutex_)
+  /// update() without a search (estimate_values false): the model's own values on the window.
+  /// `frames_added`: frames_added_ when `window` was taken; false when no frame came since the
+  /// last held estimate, or the model changed since `version`.
+  bool holdModelValues(Model model, const Trajectory& window, uint64_t frames_added,
+                       uint64_t version);
 
   // model_ and model_version_ are read and replaced under model_mutex_, held only for a copy, so
   // services and marker building never wait for an update (std::mutex is not fair: a reader
