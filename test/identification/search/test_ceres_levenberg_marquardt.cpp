@@ -13,6 +13,7 @@
 
 #include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/scenes/random_object.h"
 #include "motion_model_estimation/identification/search/ceres_levenberg_marquardt.h"
 #include "test_helpers.h"
 
@@ -84,14 +85,14 @@ TEST(CeresLevenbergMarquardt, ConvergesInAFewJacobiansInsideItsLimitsAndBounds) 
   EXPECT_EQ(limited.status, mme::RefineStatus::kEvaluationLimit);
   EXPECT_LT(limited.cost, f.cost->evaluate(space.toPhysical(start), nullptr));
 
-  // A Jacobian beyond the memory cap: it does not start (the start's cost is all it computed).
+  // A Jacobian beyond the memory cap: it stops after computing it, at the start.
   mme::LmSettings small;
   small.max_jacobian_entries = 10;
   const mme::LmResult refused = mme::levenbergMarquardt(*f.cost, space, start, small, nullptr);
   EXPECT_EQ(refused.status, mme::RefineStatus::kJacobianTooLarge);
   EXPECT_EQ(refused.genes, start);
-  EXPECT_EQ(refused.evaluations, 1u);
-  EXPECT_EQ(refused.jacobians, 0);
+  EXPECT_EQ(refused.evaluations, n + 1);
+  EXPECT_EQ(refused.solves, 0);
 
   // The first type's stiffness (true 20 N/m) capped at 15: the answer sits on that bound.
   mme::Model capped = f.search;
@@ -228,6 +229,85 @@ TEST(CeresLevenbergMarquardt, MapsEachEndingToItsStatus) {
   EXPECT_EQ(not_run.jacobians, 0);
   EXPECT_EQ(not_run.evaluations, 1u);
   EXPECT_EQ(not_run.genes, start);
+}
+
+/// A model of many bond types (48 genes) whose particles' residuals move with the few types
+/// bonded there: a Jacobian that is mostly absent.
+struct ManyTypes {
+  ManyTypes() {
+    mme::RandomObjectSpec spec;
+    spec.particles = 30;
+    spec.bond_types = 24;
+    spec.bonds = 60;
+    spec.seed = 3;
+    truth = mme::makeRandomObject(spec);
+    data = mme::simulateTrajectory(truth, 40, spec.frame_rate_hz);
+    search = mme::test::withoutValues(truth);
+    cost = std::make_shared<mme::ShortTermCost>(search, data);
+    want = mme::getValues(truth, mme::freeParameters(truth));
+  }
+  mme::Model truth, search;
+  mme::Trajectory data;
+  std::shared_ptr<mme::ShortTermCost> cost;
+  std::vector<double> want;
+};
+
+// Ceres solves the many-type model on residual blocks over the genes that move them (the
+// Jacobian's non-zeros, a sparse Cholesky), and converges to the truth from 10 % off in a few
+// Jacobians, the same on two threads.
+TEST(CeresLevenbergMarquardt, SolvesAManyTypeModelOnItsSparseStructure) {
+  const ManyTypes p;
+  const mme::ParameterSpace space(p.search, p.data);
+  ASSERT_EQ(space.size(), 48u);
+  const std::vector<double> start = startOff(space, p.want, 0.1);
+  const mme::LmResult one = mme::levenbergMarquardt(*p.cost, space, start, {}, nullptr);
+  EXPECT_TRUE(one.sparse);
+  EXPECT_EQ(one.solves, 1);
+  EXPECT_LT(maxRelativeError(space.toPhysical(one.genes), p.want), 1e-7) << one.cost;
+  EXPECT_EQ(one.status, mme::RefineStatus::kConverged);
+  EXPECT_LT(one.jacobians, 15);
+  mme::ThreadPool pool(2);
+  const mme::LmResult two = mme::levenbergMarquardt(*p.cost, space, start, {}, &pool);
+  EXPECT_EQ(two.genes, one.genes);
+  EXPECT_EQ(two.evaluations, one.evaluations);
+}
+
+// A cost whose structure changes with the point: an extra residual moves with gene 1 only once
+// gene 0 has risen above its start (no slope there, so the start's Jacobian has no entry for
+// it). The Jacobian that finds the new entry restarts the solve on a layout that holds it, and
+// the search converges as on the model alone.
+TEST(CeresLevenbergMarquardt, ASolveRestartsWhenTheStructureGrows) {
+  const ManyTypes p;
+  const mme::ParameterSpace space(p.search, p.data);
+  std::vector<double> start = startOff(space, p.want, 0.1);
+  start[0] = space.reflect(0, space.toSearch(p.want)[0] - 0.2 * std::abs(space.toSearch(p.want)[0]));
+  const double gate = space.toPhysical(start)[0];
+  struct Growing final : public mme::Cost {
+    const mme::Cost& inner;
+    double gate;
+    Growing(const mme::Cost& c, double g) : inner(c), gate(g) {}
+    const std::vector<mme::ParamRef>& freeParameters() const override { return inner.freeParameters(); }
+    double evaluate(const std::vector<double>& v, std::vector<double>*) const override {
+      std::vector<double> r;
+      return residuals(v, &r);
+    }
+    double residuals(const std::vector<double>& v, std::vector<double>* r) const override {
+      const double c = inner.residuals(v, r);
+      const double extra = 1e-6 * std::max(0.0, v[0] - gate) * v[1];
+      r->push_back(extra);
+      return c + extra * extra;
+    }
+    size_t residualCount() const override { return inner.residualCount() + 1; }
+    uint64_t termCount() const override { return inner.termCount(); }
+    int numParticles() const override { return inner.numParticles(); }
+    const char* name() const override { return "growing"; }
+  } growing(*p.cost, gate);
+  const mme::LmResult r = mme::levenbergMarquardt(growing, space, start, {}, nullptr);
+  EXPECT_TRUE(r.sparse);
+  EXPECT_GE(r.solves, 2);
+  EXPECT_GT(space.toPhysical(r.genes)[0], gate);
+  EXPECT_LT(maxRelativeError(space.toPhysical(r.genes), p.want), 1e-3) << r.cost;
+  EXPECT_DOUBLE_EQ(r.cost, growing.evaluate(space.toPhysical(r.genes), nullptr));
 }
 
 }  // namespace
