@@ -22,6 +22,9 @@ namespace {
 constexpr int kMaxFailedSteps = 49;
 /// The damping's start (Ceres' trust region radius is its inverse).
 constexpr double kInitialDamping = 1e-3;
+/// Up to this many movable genes the Jacobian is one dense block whatever its sparsity: the
+/// dense normal equations cost little there, less than a sparse Cholesky's analysis per solve.
+constexpr size_t kDenseParameters = 32;
 
 /// A point Ceres evaluated: its movable genes, residuals and their squared sum.
 struct Point {
@@ -35,7 +38,8 @@ struct Point {
 /// parameters (movable genes) that move them. A gene moves only the terms near its bond type's
 /// sites, so a large model's Jacobian is mostly absent and Ceres forms the damped normal
 /// equations from the blocks (sparse Cholesky) at the cost of the sum over residuals of their
-/// parameters squared; one block over every parameter when a quarter of the Jacobian is there.
+/// parameters squared; one block over every parameter when a quarter of the Jacobian is there
+/// or the genes are few.
 struct Layout {
   std::vector<std::vector<uint32_t>> rows;    ///< per residual block: its residuals
   std::vector<std::vector<uint32_t>> params;  ///< per residual block: its parameters, ascending
@@ -47,7 +51,7 @@ struct Layout {
 
 /// The layout of a Jacobian `jac` (m residuals, n parameters), each residual also keeping the
 /// parameters it had in `widen` (may be null); dense (one block) when at least a quarter of the
-/// entries are there and the dense Jacobian fits in `max_entries`.
+/// entries are there or n is small, and the dense Jacobian fits in `max_entries`.
 Layout makeLayout(const ResidualJacobian& jac, size_t m, size_t n, const Layout* widen,
                   uint64_t max_entries) {
   std::vector<std::vector<uint32_t>> of_row(m);
@@ -68,7 +72,7 @@ Layout makeLayout(const ResidualJacobian& jac, size_t m, size_t n, const Layout*
   l.block_of_row.resize(m);
   l.local_row.resize(m);
   const double dense_entries = static_cast<double>(m) * static_cast<double>(n);
-  if (4.0 * static_cast<double>(stored) >= dense_entries &&
+  if ((4.0 * static_cast<double>(stored) >= dense_entries || n <= kDenseParameters) &&
       dense_entries <= static_cast<double>(max_entries)) {
     l.rows.emplace_back(m);
     l.params.emplace_back(n);

@@ -8,7 +8,7 @@
 // only the terms near its bond type's sites, so the residuals are grouped into Ceres residual
 // blocks by the genes that move them (the start's Jacobian's non-zeros) and Ceres solves the
 // damped normal equations by sparse Cholesky; one dense block when a quarter of the Jacobian is
-// there. A later Jacobian with a non-zero outside those blocks (the structure changed with the
+// there or the genes are few (32 at most). A later Jacobian with a non-zero outside those blocks (the structure changed with the
 // point: a contact, a switching bond) restarts the solve from its point on blocks that hold it.
 // Ceres runs the damping (Marquardt's diagonal scaling, Nielsen's update, starting at 1e-3) and
 // the linear algebra; the package's stopping rules (step tolerance, stall, evaluation budget,
