@@ -47,13 +47,37 @@ struct Layout {
   std::vector<uint32_t> local_row;            ///< per residual: its row in its block
   std::vector<size_t> offset;  ///< per residual block: its Jacobian (rows x params) in the cache
   size_t entries = 0;
+  /// One block over every residual and parameter: Ceres' columns are copied from the Jacobian's
+  /// sparse columns directly (no cache).
+  bool dense = false;
 };
+
+/// The dense layout: one block over every residual and parameter.
+Layout denseLayout(size_t m, size_t n) {
+  Layout l;
+  l.dense = true;
+  l.block_of_row.assign(m, 0);
+  l.local_row.resize(m);
+  l.rows.emplace_back(m);
+  l.params.emplace_back(n);
+  for (size_t i = 0; i < m; ++i) l.rows[0][i] = l.local_row[i] = static_cast<uint32_t>(i);
+  for (size_t j = 0; j < n; ++j) l.params[0][j] = static_cast<uint32_t>(j);
+  l.offset.push_back(0);
+  l.entries = m * n;
+  return l;
+}
 
 /// The layout of a Jacobian `jac` (m residuals, n parameters), each residual also keeping the
 /// parameters it had in `widen` (may be null); dense (one block) when at least a quarter of the
 /// entries are there or n is small, and the dense Jacobian fits in `max_entries`.
 Layout makeLayout(const ResidualJacobian& jac, size_t m, size_t n, const Layout* widen,
                   uint64_t max_entries) {
+  const double dense_entries = static_cast<double>(m) * static_cast<double>(n);
+  const auto dense = [&](size_t stored) {
+    return (4.0 * static_cast<double>(stored) >= dense_entries || n <= kDenseParameters) &&
+           dense_entries <= static_cast<double>(max_entries);
+  };
+  if (!widen && dense(jac.nonZeros())) return denseLayout(m, n);
   std::vector<std::vector<uint32_t>> of_row(m);
   size_t stored = 0;
   for (size_t j = 0; j < n; ++j)
@@ -68,20 +92,10 @@ Layout makeLayout(const ResidualJacobian& jac, size_t m, size_t n, const Layout*
     }
     stored += of_row[i].size();
   }
+  if (dense(stored)) return denseLayout(m, n);
   Layout l;
   l.block_of_row.resize(m);
   l.local_row.resize(m);
-  const double dense_entries = static_cast<double>(m) * static_cast<double>(n);
-  if ((4.0 * static_cast<double>(stored) >= dense_entries || n <= kDenseParameters) &&
-      dense_entries <= static_cast<double>(max_entries)) {
-    l.rows.emplace_back(m);
-    l.params.emplace_back(n);
-    for (size_t i = 0; i < m; ++i) l.rows[0][i] = l.local_row[i] = static_cast<uint32_t>(i);
-    for (size_t j = 0; j < n; ++j) l.params[0][j] = static_cast<uint32_t>(j);
-    l.offset.push_back(0);
-    l.entries = m * n;
-    return l;
-  }
   std::map<std::vector<uint32_t>, uint32_t> block_of;
   for (size_t i = 0; i < m; ++i) {
     // A residual no parameter moves (here) still belongs to Ceres' cost: it joins parameter 0.
@@ -137,6 +151,7 @@ struct LmRun : public ceres::EvaluationCallback {
   const Layout* layout = nullptr;
   std::vector<double> cache;  ///< the Jacobian at `current` by residual blocks (Layout::offset)
   bool outside = false;       ///< it has a non-zero the layout has no place for
+  bool zero_jacobian = false;  ///< Ceres gets a zero Jacobian (a rule ended the search there)
   const Point* prepared = nullptr;  ///< the point Ceres evaluates now (null: the model blew up)
   std::vector<double> cost_after;  ///< the start's cost, then after each accepted step
   double radius = 1.0 / kInitialDamping;  ///< Ceres' radius for the next step (1 / damping)
@@ -179,7 +194,8 @@ struct LmRun : public ceres::EvaluationCallback {
     if (!(current.at(p.x.data()) && !jacobian.rows.empty())) {
       if (reason == RefineStatus::kNotRun) reason = beforeJacobian(p);
       if (reason != RefineStatus::kNotRun) {
-        cache.assign(layout ? layout->entries : 0, 0.0);
+        zero_jacobian = true;
+        if (layout && !layout->dense) cache.assign(layout->entries, 0.0);
         return;
       }
       current = p;
@@ -200,8 +216,10 @@ struct LmRun : public ceres::EvaluationCallback {
   /// The Jacobian into the blocks' cache; a non-zero outside the layout is flagged.
   void scatter() {
     const Layout& l = *layout;
+    zero_jacobian = reason != RefineStatus::kNotRun || jacobian.rows.size() != n();
+    if (l.dense) return;  // ResidualBlock copies the columns
     cache.assign(l.entries, 0.0);
-    if (reason != RefineStatus::kNotRun) return;
+    if (zero_jacobian) return;
     for (size_t j = 0; j < jacobian.rows.size(); ++j)
       for (size_t e = 0; e < jacobian.rows[j].size(); ++e) {
         const uint32_t i = jacobian.rows[j][e];
@@ -305,6 +323,17 @@ class ResidualBlock final : public ceres::CostFunction {
     const std::vector<uint32_t>& rows = layout_->rows[block_];
     for (size_t k = 0; k < rows.size(); ++k) residuals[k] = p->r[rows[k]];
     if (!jacobians) return true;
+    if (layout_->dense) {
+      const ResidualJacobian& jac = run_->jacobian;
+      for (size_t q = 0; q < layout_->params[block_].size(); ++q) {
+        if (!jacobians[q]) continue;
+        std::fill(jacobians[q], jacobians[q] + rows.size(), 0.0);
+        if (run_->zero_jacobian) continue;
+        for (size_t e = 0; e < jac.rows[q].size(); ++e)
+          jacobians[q][jac.rows[q][e]] = jac.values[q][e];
+      }
+      return true;
+    }
     const size_t width = layout_->params[block_].size();
     const double* from = run_->cache.data() + layout_->offset[block_];
     for (size_t q = 0; q < width; ++q) {
