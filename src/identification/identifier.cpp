@@ -13,7 +13,7 @@
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/stiffness.h"
 #include "motion_model_estimation/identification/estimators/equation_error.h"
-#include "motion_model_estimation/identification/search/levenberg_marquardt.h"
+#include "motion_model_estimation/identification/search/residual_jacobian.h"
 
 namespace mme {
 
@@ -78,12 +78,12 @@ std::vector<double> estimateStdDevs(const Cost& cost, const ParameterSpace& spac
   const double c = cost.residuals(space.toPhysical(genes), &r);
   if (!std::isfinite(c)) return out;
   const Eigen::VectorXd residual = Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
-  detail::JacobianColumns jac;
-  if (!detail::forwardJacobian(cost, space, genes, residual, active, 100000000, pool, &jac))
+  ResidualJacobian jac;
+  if (!forwardJacobian(cost, space, genes, residual, active, 100000000, pool, &jac))
     return out;
   Eigen::MatrixXd jtj;
   Eigen::VectorXd g;
-  detail::normalEquations(jac, residual, &jtj, &g);
+  normalEquations(jac, residual, &jtj, &g);
   const Eigen::Index na = static_cast<Eigen::Index>(active.size());
   Eigen::VectorXd scale(na);
   for (Eigen::Index j = 0; j < na; ++j) scale[j] = jtj(j, j) > 0.0 ? 1.0 / std::sqrt(jtj(j, j)) : 0.0;

@@ -7,7 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "motion_model_estimation/identification/search/levenberg_marquardt.h"
+#include "motion_model_estimation/identification/search/ceres_levenberg_marquardt.h"
 
 namespace mme {
 
@@ -164,7 +164,7 @@ class NloptRefiner final : public Refiner {
   RefineAlgorithm algorithm_;
 };
 
-/// Levenberg-Marquardt on the cost's residuals (levenberg_marquardt.h); a Jacobian over its
+/// Levenberg-Marquardt on the cost's residuals (ceres_levenberg_marquardt.h); a Jacobian over its
 /// memory cap falls back to BOBYQA (O(n^2) memory) from the best point reached.
 class LmRefiner final : public Refiner {
  public:
