@@ -1,5 +1,6 @@
 #include "motion_model_estimation/pipeline/identify_pipeline.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <utility>
 
@@ -102,14 +103,32 @@ void fitSensorMuscleStep(const Trajectory& trajectory, const PipelineOptions& op
                       "): the passive model is written");
 }
 
+void startAtFrame(const Trajectory& trajectory, int frame, Model* model) {
+  if (frame < 0 || frame >= trajectory.numFrames())
+    throw InputError("start frame " + std::to_string(frame) + " is outside the data's " +
+                     std::to_string(trajectory.numFrames()) + " frames (counted from 0)");
+  const double rate_hz = model->frame_rate_hz > 0.0 ? model->frame_rate_hz : trajectory.frame_rate_hz;
+  const int n = std::min<int>(trajectory.numMarkers(), static_cast<int>(model->particles.size()));
+  for (int i = 0; i < n; ++i) {
+    Particle& p = model->particles[i];
+    if (p.fixed || trajectory.isOccluded(frame, i)) continue;
+    p.position_m = trajectory.position(frame, i);
+    if (frame + 1 < trajectory.numFrames() && !trajectory.isOccluded(frame + 1, i) && rate_hz > 0.0)
+      p.velocity_mps = (trajectory.position(frame + 1, i) - p.position_m) * rate_hz;
+  }
+}
+
 PipelineResult runPipeline(const Model& model, const Trajectory& trajectory,
                            const PipelineOptions& options) {
   const std::string bad = validateOptions(options);
   if (!bad.empty()) throw InputError(bad);
   PipelineResult result;
+  PipelineOptions steps = options;  // the cancel flag reaches every step through identify
+  if (options.cancel) steps.identify.cancel = options.cancel;
+  auto cancelled = [&options] { return options.cancel && options.cancel->load(); };
   Model current = model;
   if (options.select_structure) {
-    result.structure = chooseStructure(current, trajectory, options);
+    result.structure = chooseStructure(current, trajectory, steps);
     current = result.structure->model;
     if (options.structure_chosen) options.structure_chosen(*result.structure);
   }
@@ -124,10 +143,17 @@ PipelineResult runPipeline(const Model& model, const Trajectory& trajectory,
                      std::to_string(options.muscles->hidden) + " hidden unit(s)");
   }
   if (options.identification_starts) options.identification_starts(current, trajectory);
-  result.identified = identifyPassive(current, trajectory, options);
+  result.identified = identifyPassive(current, trajectory, steps);
   result.model = result.identified.model;
+  startAtFrame(trajectory, 0, &result.model);
   result.notes = result.identified.notes;
-  if (options.sensor_muscles) fitSensorMuscleStep(trajectory, options, &result);
+  result.cancelled = cancelled();
+  if (options.passive_identified) options.passive_identified(result);
+  if (options.sensor_muscles && !result.cancelled) {
+    fitSensorMuscleStep(trajectory, steps, &result);
+    startAtFrame(trajectory, 0, &result.model);
+  }
+  result.cancelled = cancelled();
   return result;
 }
 
