@@ -205,11 +205,12 @@ void installInterruptHandlers(const std::string& out_path) {
 
 /// When the run last printed a line, and a thread that prints a heartbeat line when a step has
 /// been silent for kHeartbeatS (a structure level, an output-error fit or a muscle step can
-/// run for minutes without a line of its own).
+/// run for minutes without a line of its own); silent itself with --quiet (`enabled` false).
 class Heartbeat {
  public:
   static constexpr double kHeartbeatS = 15.0;
-  Heartbeat() : start_(Clock::now()), last_(start_), thread_([this] { loop(); }) {}
+  explicit Heartbeat(bool enabled)
+      : enabled_(enabled), start_(Clock::now()), last_(start_), thread_([this] { loop(); }) {}
   ~Heartbeat() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -233,7 +234,7 @@ class Heartbeat {
       wake_.wait_for(lock, std::chrono::seconds(1));
       if (stop_) break;
       const double silent_s = std::chrono::duration<double>(Clock::now() - last_).count();
-      if (silent_s < kHeartbeatS) continue;
+      if (!enabled_ || silent_s < kHeartbeatS) continue;
       const double total_s = std::chrono::duration<double>(Clock::now() - start_).count();
       std::printf("identify: still working (%.0f s in all, %.0f s since the last line%s%s)\n", total_s,
                   silent_s, step_.empty() ? "" : "; last: ", step_.c_str());
@@ -241,6 +242,7 @@ class Heartbeat {
       last_ = Clock::now();
     }
   }
+  const bool enabled_;
   Clock::time_point start_, last_;
   std::string step_;
   std::mutex mutex_;
@@ -470,7 +472,7 @@ int run(int argc, char** argv) {
   if (mme::printHelpIfAsked(argc, argv, spec)) return 0;
   const mme::CliArgs args(argc, argv, spec);
   Command c = parseCommand(args);
-  Heartbeat heartbeat;
+  Heartbeat heartbeat(!c.quiet);
   connectOutput(&c, &heartbeat);
 
   mme::Model model;
