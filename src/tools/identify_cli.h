@@ -96,7 +96,7 @@ inline CliSpec identifyCliSpec() {
       "evaluate --model OUT.yaml --trajectory FILE judges how well the model predicts; "
       "simulate --model OUT.yaml --frames N --out play.trc plays it from the first used frame "
       "(simulate --trajectory FILE --start-frame F from another frame); "
-      "roslaunch motion_model_estimation replay.launch shows it in rviz.";
+      "replay.launch shows a model in rviz (docs/node.md).";
   return s;
 }
 

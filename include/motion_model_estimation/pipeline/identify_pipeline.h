@@ -100,8 +100,10 @@ void fitSensorMuscleStep(const Trajectory& trajectory, const PipelineOptions& op
 /// Step 6: the particles' initial state from frame `frame` of `trajectory` (which holds the
 /// model's particles as markers, remapMarkers), so that the model plays from where the data
 /// are: a free particle seen there starts at its position [m] and, when also seen in the next
-/// frame, with the frame difference as its velocity [m/s]; fixed particles (anchors, ground
-/// points) and particles not seen keep the model's. InputError when `frame` is outside the data.
+/// frame, with the velocity [m/s] that makes one simulated frame land on it (the frame
+/// difference corrected for the integrator; the frame difference itself when the model cannot
+/// be simulated); fixed particles (anchors, ground points) and particles not seen keep the
+/// model's. InputError when `frame` is outside the data.
 void startAtFrame(const Trajectory& trajectory, int frame, Model* model);
 
 /// Every step the options ask for, in order, from `model` (a model file's, or startingModel's)
