@@ -48,8 +48,8 @@ mme::CliSpec simulateCliSpec() {
         {"scene", "NAME", "none (give --model or --scene)", "A built-in scene instead (e.g. paper_object; see docs/scenes.md)."},
         {"trajectory", "FILE", "none",
          "A capture (TRC, C3D or bag) whose frame --start-frame gives the initial state: each "
-         "particle seen there starts at its marker's position, with the frame difference to the "
-         "next frame as its velocity."},
+         "particle seen there starts at its marker's position, with the velocity that lands one "
+         "simulated frame on the next frame."},
         {"trajectory-topic", "T", "the bag's only MarkerFrame topic", "The bag topic of --trajectory."},
         {"start-frame", "F", "0",
          "The frame of --trajectory to start from, counted from 0 (not by the file's Frame# column, which often starts at 1)."}}},
