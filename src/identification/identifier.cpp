@@ -47,6 +47,7 @@ const char* identifyStopName(IdentifyStop stop) {
     case IdentifyStop::kTargetCost: return "target cost";
     case IdentifyStop::kWallTime: return "wall-time limit";
     case IdentifyStop::kConverged: return "converged";
+    case IdentifyStop::kCancelled: return "interrupted";
   }
   return "?";
 }
@@ -289,11 +290,14 @@ class Identification {
     r_.estimator = Estimator::kShortTerm;
     r_.noise_estimate_m = estimateMarkerNoise(trajectory_);
     unidentifiable_.assign(space_->size(), 0);
-    if (wantsOutputError() && stop_ != IdentifyStop::kWallTime) runOutputError();
+    if (stop_ != IdentifyStop::kWallTime && stop_ != IdentifyStop::kCancelled && wantsOutputError())
+      runOutputError();
     return result();
   }
 
  private:
+  bool cancelled() const { return options_.cancel && options_.cancel->load(); }
+
   double elapsed() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   }
@@ -336,6 +340,7 @@ class Identification {
       generations_done_ += es_->generation();
       evaluations_done_ += es_->evaluations();
       if (stop_ == IdentifyStop::kTargetCost || stop_ == IdentifyStop::kWallTime ||
+          stop_ == IdentifyStop::kCancelled ||
           widenings_ >= options_.max_bound_widenings || generations_done_ >= options_.generations)
         return;
       if (!at_default_bound && widenableAtBound(*space_, es_->best().genes).empty()) return;
@@ -358,6 +363,7 @@ class Identification {
     if (options_.max_wall_time_s > 0.0)
       es_->setDeadline(start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                     std::chrono::duration<double>(options_.max_wall_time_s)));
+    es_->setCancel(options_.cancel);
     std::vector<double> best_after;  // per generation of this run
     int refinements_seen = 0;
     stop_ = IdentifyStop::kGenerations;
@@ -372,6 +378,10 @@ class Identification {
       }
       if (options_.max_wall_time_s > 0.0 && elapsed() >= options_.max_wall_time_s) {
         stop_ = IdentifyStop::kWallTime;
+        return false;
+      }
+      if (cancelled()) {
+        stop_ = IdentifyStop::kCancelled;
         return false;
       }
       if (es_->refinements() != refinements_seen) {
@@ -502,6 +512,7 @@ class Identification {
       o.max_time_s = o.max_time_s > 0.0 ? std::min(o.max_time_s, left) : left;
     }
     o.estimate_std = estimate_std;
+    if (options_.cancel) o.cancel = options_.cancel;
     return estimateOutputError(m, trajectory_, *space_, from, o);
   }
 
@@ -629,7 +640,7 @@ class Identification {
     r_.notes = notes_;
     r_.flags = parameterFlags(*space_, best_genes_, &unidentifiable_);
     if (r_.estimator == Estimator::kShortTerm)
-      std_devs_ = options_.estimate_std
+      std_devs_ = options_.estimate_std && stop_ != IdentifyStop::kCancelled
                       ? estimateStdDevs(*cost_, *space_, best_genes_)
                       : std::vector<double>(r_.values.size(), std::numeric_limits<double>::quiet_NaN());
     thresholdUncertainty();

@@ -155,6 +155,10 @@ void writeIdentification(YAML::Emitter& out, const IdentificationInfo& info) {
   out << YAML::Key << "identification" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "method" << YAML::Value;
   emitName(out, info.method);
+  if (!info.model_kind.empty()) {
+    out << YAML::Key << "model_kind" << YAML::Value;
+    emitName(out, info.model_kind);
+  }
   out << YAML::Key << "global_cost" << YAML::Value;
   emitNumber(out, info.global_cost);
   out << YAML::Key << "frames" << YAML::Value << info.frames;

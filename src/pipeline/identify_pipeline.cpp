@@ -1,10 +1,12 @@
 #include "motion_model_estimation/pipeline/identify_pipeline.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <utility>
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/muscle.h"
+#include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/structure/marker_model.h"
 
 namespace mme {
@@ -102,14 +104,57 @@ void fitSensorMuscleStep(const Trajectory& trajectory, const PipelineOptions& op
                       "): the passive model is written");
 }
 
+void startAtFrame(const Trajectory& trajectory, int frame, Model* model) {
+  if (frame < 0 || frame >= trajectory.numFrames())
+    throw InputError("start frame " + std::to_string(frame) + " is outside the data's " +
+                     std::to_string(trajectory.numFrames()) + " frames (counted from 0)");
+  const double rate_hz = model->frame_rate_hz > 0.0 ? model->frame_rate_hz : trajectory.frame_rate_hz;
+  const int n = std::min<int>(trajectory.numMarkers(), static_cast<int>(model->particles.size()));
+  std::vector<int> aimed;  // particles whose next frame is seen: their velocity lands on it
+  for (int i = 0; i < n; ++i) {
+    Particle& p = model->particles[i];
+    if (p.fixed || trajectory.isOccluded(frame, i)) continue;
+    p.position_m = trajectory.position(frame, i);
+    if (frame + 1 < trajectory.numFrames() && !trajectory.isOccluded(frame + 1, i) && rate_hz > 0.0) {
+      p.velocity_mps = (trajectory.position(frame + 1, i) - p.position_m) * rate_hz;
+      aimed.push_back(i);
+    }
+  }
+  if (aimed.empty() || !(rate_hz > 0.0) || !validateModel(*model).empty()) return;
+  // The frame difference is not the velocity the integrator needs (semi-implicit Euler moves by
+  // h (v + h a)): corrected so that one simulated frame lands on the next data frame, which then
+  // makes a model that is the truth replay its data. Kept only when every correction is finite
+  // (a model whose values are not all set, or one that blows up, keeps the frame difference).
+  std::vector<Eigen::Vector3d> velocity_mps(aimed.size());
+  for (size_t k = 0; k < aimed.size(); ++k) velocity_mps[k] = model->particles[aimed[k]].velocity_mps;
+  try {
+    Simulator sim(*model);
+    for (int round = 0; round < 4; ++round) {
+      State s = sim.initialState();
+      for (size_t k = 0; k < aimed.size(); ++k) s.v_mps[aimed[k]] = velocity_mps[k];
+      sim.stepFrame(&s, 1.0 / rate_hz);
+      for (size_t k = 0; k < aimed.size(); ++k)
+        velocity_mps[k] += (trajectory.position(frame + 1, aimed[k]) - s.x_m[aimed[k]]) * rate_hz;
+    }
+  } catch (const std::exception&) {
+    return;
+  }
+  for (const Eigen::Vector3d& v : velocity_mps)
+    if (!v.allFinite()) return;
+  for (size_t k = 0; k < aimed.size(); ++k) model->particles[aimed[k]].velocity_mps = velocity_mps[k];
+}
+
 PipelineResult runPipeline(const Model& model, const Trajectory& trajectory,
                            const PipelineOptions& options) {
   const std::string bad = validateOptions(options);
   if (!bad.empty()) throw InputError(bad);
   PipelineResult result;
+  PipelineOptions steps = options;  // the cancel flag reaches every step through identify
+  if (options.cancel) steps.identify.cancel = options.cancel;
+  auto cancelled = [&options] { return options.cancel && options.cancel->load(); };
   Model current = model;
   if (options.select_structure) {
-    result.structure = chooseStructure(current, trajectory, options);
+    result.structure = chooseStructure(current, trajectory, steps);
     current = result.structure->model;
     if (options.structure_chosen) options.structure_chosen(*result.structure);
   }
@@ -124,10 +169,17 @@ PipelineResult runPipeline(const Model& model, const Trajectory& trajectory,
                      std::to_string(options.muscles->hidden) + " hidden unit(s)");
   }
   if (options.identification_starts) options.identification_starts(current, trajectory);
-  result.identified = identifyPassive(current, trajectory, options);
+  result.identified = identifyPassive(current, trajectory, steps);
   result.model = result.identified.model;
+  startAtFrame(trajectory, 0, &result.model);
   result.notes = result.identified.notes;
-  if (options.sensor_muscles) fitSensorMuscleStep(trajectory, options, &result);
+  result.cancelled = cancelled();
+  if (options.passive_identified) options.passive_identified(result);
+  if (options.sensor_muscles && !result.cancelled) {
+    fitSensorMuscleStep(trajectory, steps, &result);
+    startAtFrame(trajectory, 0, &result.model);
+  }
+  result.cancelled = cancelled();
   return result;
 }
 

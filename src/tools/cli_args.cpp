@@ -5,28 +5,83 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <map>
 #include <sstream>
 
 #include "motion_model_estimation/core/error.h"
 
 namespace mme {
 
-CliArgs::CliArgs(int argc, char** argv, const std::set<std::string>& valued,
-                 const std::set<std::string>& flags) {
+CliArgs::CliArgs(int argc, char** argv, const CliSpec& spec) {
+  std::map<std::string, bool> valued;  // name -> takes a value
+  valued["help"] = false;
+  for (const CliGroup& group : spec.groups)
+    for (const CliOption& option : group.options) valued[option.name] = !option.value_name.empty();
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg.rfind("--", 0) != 0) throw InputError("unexpected argument '" + arg + "'");
+    if (arg.rfind("--", 0) != 0)
+      throw InputError("unexpected argument '" + arg + "' (options start with --; see --help)");
     const std::string key = arg.substr(2);
     if (values_.count(key)) throw InputError("option --" + key + " given twice");
-    if (flags.count(key)) {
+    auto it = valued.find(key);
+    if (it == valued.end()) throw InputError("unknown option --" + key + " (see --help)");
+    if (!it->second) {
       values_[key] = "1";
-    } else if (valued.count(key)) {
+    } else {
       if (i + 1 >= argc) throw InputError("option --" + key + " needs a value");
       values_[key] = argv[++i];
-    } else {
-      throw InputError("unknown option --" + key);
     }
   }
+}
+
+namespace {
+
+/// `text` wrapped to lines of at most `width` characters, each prefixed by `indent`.
+std::string wrap(const std::string& text, size_t indent, size_t width) {
+  std::istringstream words(text);
+  std::string word, out, line;
+  const std::string pad(indent, ' ');
+  while (words >> word) {
+    if (!line.empty() && line.size() + 1 + word.size() > width - indent) {
+      out += pad + line + "\n";
+      line.clear();
+    }
+    line += (line.empty() ? "" : " ") + word;
+  }
+  if (!line.empty()) out += pad + line + "\n";
+  return out;
+}
+
+}  // namespace
+
+std::string formatHelp(const CliSpec& spec) {
+  constexpr size_t kWidth = 100;
+  std::string out = "usage: " + spec.tool + " " + spec.synopsis + "\n\n" + wrap(spec.purpose, 0, kWidth);
+  for (const CliGroup& group : spec.groups) {
+    out += "\n" + group.title + ":\n";
+    for (const CliOption& o : group.options) {
+      out += "  --" + o.name + (o.value_name.empty() ? "" : " " + o.value_name) + "\n";
+      std::string meaning = o.meaning;
+      if (!o.default_text.empty()) meaning += " Default: " + o.default_text + ".";
+      out += wrap(meaning, 6, kWidth);
+    }
+  }
+  out += "\n  --help\n" + wrap("This reference.", 6, kWidth);
+  if (!spec.examples.empty()) {
+    out += "\nExamples:\n";
+    for (const std::string& example : spec.examples) out += "  " + example + "\n";
+  }
+  if (!spec.next_step.empty()) out += "\nNext step:\n" + wrap(spec.next_step, 2, kWidth);
+  return out;
+}
+
+bool printHelpIfAsked(int argc, char** argv, const CliSpec& spec) {
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]) == "--help") {
+      std::fputs(formatHelp(spec).c_str(), stdout);
+      return true;
+    }
+  return false;
 }
 
 std::string CliArgs::get(const std::string& key, const std::string& fallback) const {
@@ -58,6 +113,7 @@ double CliArgs::getDouble(const std::string& key, double fallback, double min, d
 }
 
 int runTool(const char* tool, int (*run)(int, char**), int argc, char** argv) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
   try {
     return run(argc, argv);
   } catch (const InputError& e) {

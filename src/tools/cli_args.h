@@ -1,19 +1,46 @@
-// Minimal "--key value" command-line parsing for the tools, with one-line errors.
+// Command-line parsing for the tools from one option table per tool: the same table parses the
+// command line and prints `--help`, so an option cannot be accepted without being documented.
 #pragma once
 
 #include <map>
-#include <set>
 #include <string>
 #include <vector>
 
 namespace mme {
 
-/// Parses argv into key -> value for "--key value" pairs and "--flag" switches. Throws
+/// One option of a tool: "--name VALUE" (a valued option) or "--name" (a switch).
+struct CliOption {
+  std::string name;         ///< without the leading "--"
+  std::string value_name;   ///< e.g. "FILE", "N"; empty: a switch
+  std::string default_text; ///< what holds when the option is not given ("" for switches)
+  std::string meaning;      ///< one or two sentences for --help
+};
+
+/// A titled group of options, in the order --help lists them.
+struct CliGroup {
+  std::string title;
+  std::vector<CliOption> options;
+};
+
+/// A tool's whole command line: what it does, its options, examples and the next step.
+struct CliSpec {
+  std::string tool;
+  std::string synopsis;  ///< the usage line after "usage: TOOL "
+  std::string purpose;   ///< what the tool is for, a sentence or two
+  std::vector<CliGroup> groups;
+  std::vector<std::string> examples;  ///< whole command lines
+  std::string next_step;              ///< what to run next with the tool's output
+};
+
+/// The reference --help prints: usage, purpose, every option grouped with its meaning and
+/// default, examples, the next step.
+std::string formatHelp(const CliSpec& spec);
+
+/// Parses argv into key -> value by `spec`'s table ("--help" is always a switch). Throws
 /// InputError on an unknown option, a missing value or a repeated option.
 class CliArgs {
  public:
-  CliArgs(int argc, char** argv, const std::set<std::string>& valued,
-          const std::set<std::string>& flags);
+  CliArgs(int argc, char** argv, const CliSpec& spec);
   bool has(const std::string& key) const { return values_.count(key) != 0; }
   std::string get(const std::string& key, const std::string& fallback = "") const;
   /// Integer option in [min, max]; InputError naming the option otherwise.
@@ -30,8 +57,14 @@ class CliArgs {
 std::vector<int> parseCountList(const std::string& text, const std::string& option, long max,
                                 const std::string& example);
 
-/// A tool's main(): runs `run` and turns exceptions into one line on stderr prefixed by the
-/// tool's name, exit code 2 for bad input (InputError), 1 for anything else.
+/// A tool's main(): stdout line-buffered (so that a warning on stderr never lands inside a
+/// table when both go to one pipe), `run` run and its exceptions turned into one line on
+/// stderr prefixed by the tool's name, exit code 2 for bad input (InputError), 1 for anything
+/// else.
 int runTool(const char* tool, int (*run)(int, char**), int argc, char** argv);
+
+/// Prints formatHelp(spec) to stdout when argv holds --help; true when it did (the tool then
+/// returns 0). The help is printed before any other check so that it always works.
+bool printHelpIfAsked(int argc, char** argv, const CliSpec& spec);
 
 }  // namespace mme

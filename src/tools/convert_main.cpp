@@ -2,7 +2,6 @@
 // e.g. a recording made into a bag that estimator_node replays (~bag) at its real rate; and the
 // particles-only model of a capture (--particles-out), what structure selection starts from.
 #include <cstdio>
-#include <iostream>
 #include <string>
 
 #include "cli_args.h"
@@ -12,29 +11,46 @@
 #include "motion_model_estimation/identification/structure/marker_model.h"
 #include "motion_model_estimation/io/model_yaml.h"
 #include "motion_model_estimation/io/trajectory_io.h"
-#include "motion_model_estimation/io/trajectory_io.h"
 
 namespace {
 
-const char* kUsage =
-    "usage: convert --trajectory IN(.trc|.c3d|.bag) [--topic T] --out OUT(.bag|.trc)\n"
-    "               [--out-topic T (markers)] [--frame-id F (world)] [--units mm|cm|m (mm)]\n"
-    "               [--first-frame F] [--frames N] [--particles-out MODEL.yaml]\n"
-    "Frame times, frame numbers and the rate are kept; gaps stay occluded samples. --topic is\n"
-    "the input bag's MarkerFrame topic, --out-topic / --frame-id the output bag's, --units the\n"
-    "output TRC's. --particles-out also writes the capture's particles-only model (a particle\n"
-    "per marker, 1 kg, free gravity): the start of identify / estimator_node structure selection.\n"
-    "--out may be left out when --particles-out is given.\n";
+mme::CliSpec convertCliSpec() {
+  mme::CliSpec s;
+  s.tool = "convert";
+  s.synopsis = "--trajectory IN(.trc|.c3d|.bag) (--out OUT(.bag|.trc) | --particles-out MODEL.yaml) [options]";
+  s.purpose =
+      "A capture from one trajectory format to another (frame times, frame numbers and the rate "
+      "kept; gaps stay occluded samples), e.g. a recording made into a bag that estimator_node "
+      "replays; and the capture's particles-only model (a particle per marker, 1 kg, free "
+      "gravity), what structure selection starts from. Prints the frames, the occluded share "
+      "and the observed extent [m] (a check of the units).";
+  s.groups = {
+      {"Input",
+       {{"trajectory", "IN", "", "The capture: TRC, C3D or bag (required)."},
+        {"topic", "T", "the bag's only MarkerFrame topic", "The input bag's topic."},
+        {"first-frame", "F", "0", "The first frame kept, counted from 0 (not by the file's Frame# column, which often starts at 1)."},
+        {"frames", "N", "every frame from --first-frame on", "How many frames to keep."}}},
+      {"Output",
+       {{"out", "OUT", "none (then --particles-out is required)", "The converted capture: .bag or .trc."},
+        {"out-topic", "T", "markers", "The output bag's topic."},
+        {"frame-id", "F", "world", "The output bag's frame id (and the particles model's)."},
+        {"units", "mm|cm|m", "mm", "The output TRC's units."},
+        {"particles-out", "MODEL.yaml", "none", "Also write the capture's particles-only model."}}},
+  };
+  s.examples = {
+      "convert --trajectory capture.c3d --out capture.bag",
+      "convert --trajectory capture.trc --particles-out capture_particles.yaml",
+  };
+  s.next_step =
+      "identify --trajectory IN --select-structure --out model.yaml identifies a model of the "
+      "capture (identify --help).";
+  return s;
+}
 
 int run(int argc, char** argv) {
-  mme::CliArgs args(argc, argv,
-                    {"trajectory", "topic", "out", "out-topic", "frame-id", "units", "first-frame",
-                     "frames", "particles-out"},
-                    {"help"});
-  if (args.has("help")) {
-    std::cout << kUsage;
-    return 0;
-  }
+  const mme::CliSpec spec = convertCliSpec();
+  if (mme::printHelpIfAsked(argc, argv, spec)) return 0;
+  const mme::CliArgs args(argc, argv, spec);
   if (!args.has("trajectory")) throw mme::InputError("--trajectory is required");
   if (!args.has("out") && !args.has("particles-out"))
     throw mme::InputError("--out is required (or --particles-out)");

@@ -2,7 +2,6 @@
 // guesses that need no model (the held-out judge of identification and structure choices).
 #include <algorithm>
 #include <cstdio>
-#include <iostream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -16,12 +15,40 @@
 
 namespace {
 
-const char* kUsage =
-    "usage: evaluate --model M.yaml --trajectory FILE(.trc|.c3d|.bag) [--topic T]\n"
-    "                [--first-frame F] [--frames N] [--history H] [--horizons 1,5,10]\n"
-    "                [--csv OUT.csv]\n"
-    "--history H: the H frames before --first-frame are read as history: no prediction starts\n"
-    "there, but they place a marker hidden at a start (e.g. the frames a model was fitted on).\n";
+mme::CliSpec evaluateCliSpec() {
+  mme::CliSpec s;
+  s.tool = "evaluate";
+  s.synopsis = "--model M.yaml --trajectory FILE(.trc|.c3d|.bag) [options]";
+  s.purpose =
+      "How well a model predicts a capture K frames ahead, open loop from every frame, next to "
+      "three guesses that need no model (constant velocity, constant acceleration, gravity "
+      "only): the held-out judge of an identified model. A model that loses to a guess "
+      "explains less than the markers' own motion.";
+  s.groups = {
+      {"Input",
+       {{"model", "M.yaml", "", "An identified model, every free parameter with a value (required)."},
+        {"trajectory", "FILE", "", "The capture: TRC, C3D or bag (required)."},
+        {"topic", "T", "the bag's only MarkerFrame topic", "The bag topic to read."}}},
+      {"Frames",
+       {{"first-frame", "F", "0",
+         "The first frame judged, counted from 0 (not by the file's Frame# column, which often starts at 1)."},
+        {"frames", "N", "every frame from --first-frame on", "How many frames to judge."},
+        {"history", "H", "0",
+         "The H frames before --first-frame are read as history: no prediction starts there, "
+         "but they place a marker hidden at a start (e.g. the frames the model was fitted on)."},
+        {"horizons", "LIST", "1,5,10", "Comma-separated prediction horizons [frames]."}}},
+      {"Output",
+       {{"csv", "OUT.csv", "none", "Also write the table as CSV (columns horizon,predictor,rms_m)."}}},
+  };
+  s.examples = {
+      "evaluate --model capture_model.yaml --trajectory capture.trc",
+      "evaluate --model arm_id.yaml --trajectory arm.trc --first-frame 600 --history 100 --horizons 1,10,50 --csv arm.csv",
+  };
+  s.next_step =
+      "simulate --model M.yaml --frames N --out play.trc plays the model; a model that loses to a "
+      "guess may need --select-structure or sensor muscles (identify --help).";
+  return s;
+}
 
 /// One line per horizon at which a guess that needs no model predicts better than the model
 /// (empty: the model wins everywhere): the model then does not capture the motion.
@@ -52,13 +79,9 @@ std::vector<std::string> modelLosesWarnings(const mme::PredictionReport& report)
 }
 
 int run(int argc, char** argv) {
-  mme::CliArgs args(argc, argv,
-                    {"model", "trajectory", "topic", "first-frame", "frames", "history", "horizons", "csv"},
-                    {"help"});
-  if (args.has("help")) {
-    std::cout << kUsage;
-    return 0;
-  }
+  const mme::CliSpec spec = evaluateCliSpec();
+  if (mme::printHelpIfAsked(argc, argv, spec)) return 0;
+  const mme::CliArgs args(argc, argv, spec);
   for (const char* required : {"model", "trajectory"})
     if (!args.has(required)) throw mme::InputError(std::string("--") + required + " is required");
   const std::vector<int> horizons = mme::parseCountList(args.get("horizons", "1,5,10"), "--horizons", 100000, "1,5,10");

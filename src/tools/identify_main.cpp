@@ -1,18 +1,26 @@
 // identify: offline identification of a trajectory file or bag (SPEC section 7): the command
 // line parsed into the pipeline's options (pipeline/identify_pipeline.h), the pipeline run, its
 // result printed and written.
+#include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
+#include <cstring>
 #include <functional>
-#include <iostream>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
+#include <thread>
 
 #include "cli_args.h"
+#include "identify_cli.h"
 #include "tool_formats.h"
 #include "trajectory_input.h"
 #include "motion_model_estimation/core/error.h"
@@ -23,26 +31,6 @@
 #include "motion_model_estimation/pipeline/result_metadata.h"
 
 namespace {
-
-const char* kUsage =
-    "usage: identify --model M.yaml --trajectory FILE(.trc|.c3d|.bag) [--topic T] --out OUT.yaml\n"
-    "                [--method es] [--generations N] [--population P] [--window-frames W]\n"
-    "                [--first-frame F] [--frames N] [--seed S] [--threads T]\n"
-    "                [--compare-to-model] [--target-cost C] [--max-time-s S] [--quiet]\n"
-    "                [--preset default|paper] [--patience G]\n"
-    "                [--cost auto|short_term|output_error] [--segment-frames K]\n"
-    "                [--grow-segments G]\n"
-    "                [--refine bobyqa|newuoa|praxis|levenberg_marquardt] [--refine-start G]\n"
-    "                [--refine-period G] [--select-structure]\n"
-    "                [--add-muscles INPUTS] [--muscle-hidden H]\n"
-    "                [--sensor-muscles SENSORS] [--muscle-neighbours K] [--rollout-rounds R]\n"
-    "                [--muscle-anchors auto|0|1] [--anchor-stiffness 1|0|auto]\n"
-    "                [--muscles-max-time-s S]\n"
-    "--max-time-s bounds the structure selection (all its levels together: a cut selection\n"
-    "chooses the best level judged so far) and then the passive identification,\n"
-    "--muscles-max-time-s the sensor muscles' search after them (checked between its steps: a\n"
-    "step under way and the final refits still run; see docs/muscles.md); 0, the default for both:\n"
-    "no limit.\n";
 
 std::string formatMetres(double m) {
   char text[32];
@@ -95,14 +83,15 @@ void parseSearchOptions(const mme::CliArgs& args, Command* c) {
 }
 
 /// Sensor muscles (sensor_muscles.h), checked before the run so that a bad option does not wait
-/// for the identification. On by default with --select-structure under the default preset (a
-/// model chosen from a capture's markers), off otherwise unless asked for; --sensor-muscles 0:
-/// none. They are written only where they predict the held-out frames better.
+/// for the identification. Opt-in (--sensor-muscles SENSORS, or any of their own options): by
+/// default the answer is a plain passive model, whose cost is bounded by the passive search;
+/// the muscles add anchor particles far from the body and a search that can take far longer,
+/// so the run's closing line suggests them instead. They are written only where they predict
+/// the held-out frames better.
 void parseSensorMuscleOptions(const mme::CliArgs& args, Command* c) {
   const bool muscle_options_given = args.has("muscle-neighbours") || args.has("rollout-rounds") ||
                                     args.has("muscle-anchors") || args.has("anchor-stiffness");
-  const bool on_by_default = muscle_options_given || (args.has("select-structure") &&
-                                                      c->preset == mme::Preset::kDefault && !c->compare);
+  const bool on_by_default = muscle_options_given;
   mme::SensorMuscleOptions options;
   options.sensors = static_cast<int>(
       args.getInt("sensor-muscles", on_by_default ? options.sensors : 0, 0, mme::kMaxMuscleInputs));
@@ -111,8 +100,8 @@ void parseSensorMuscleOptions(const mme::CliArgs& args, Command* c) {
       throw mme::InputError("--muscle-neighbours, --rollout-rounds, --muscle-anchors and --anchor-stiffness need sensor "
                             "muscles (--sensor-muscles 0 turns them off)");
     if (args.has("muscles-max-time-s"))
-      throw mme::InputError("--muscles-max-time-s needs sensor muscles (on by default only with "
-                            "--select-structure; --sensor-muscles SENSORS turns them on)");
+      throw mme::InputError("--muscles-max-time-s needs sensor muscles (off by default; "
+                            "--sensor-muscles SENSORS turns them on)");
     return;
   }
   if (c->compare)
@@ -176,49 +165,211 @@ Command parseCommand(const mme::CliArgs& args) {
   return c;
 }
 
-/// The generation line: in place on a terminal (5 per second), a line every 2 s otherwise;
-/// notices (a widened bound, ...) to stderr even with --quiet.
-std::function<void(const mme::Progress&)> progressPrinter(const Command& c) {
+// ------------------------------------------------------------------ interruption and heartbeat
+
+/// Ctrl-C / SIGTERM. Before the passive model is written the first signal raises the pipeline's
+/// cancel flag (every step ends with its best so far and the model is written); once it is
+/// written (the sensor muscles run), or at a second signal, the run ends at once: the file on
+/// disk is then the passive model, or nothing was promised.
+std::atomic<bool> g_cancel{false};
+std::atomic<int> g_signal{0};
+std::atomic<bool> g_passive_written{false};
+char g_out_path[1024] = "";
+
+void writeStderr(const char* text) {
+  const ssize_t ignored = write(STDERR_FILENO, text, std::strlen(text));
+  (void)ignored;
+}
+
+void onInterrupt(int signo) {
+  if (g_passive_written.load() || g_cancel.load()) {
+    writeStderr(g_passive_written.load()
+                    ? "\nidentify: interrupted: stopped at once; the passive model written before is in "
+                    : "\nidentify: interrupted again: stopped at once, nothing written to ");
+    writeStderr(g_out_path);
+    writeStderr("\n");
+    _exit(128 + signo);
+  }
+  g_signal.store(signo);
+  g_cancel.store(true);
+  writeStderr("\nidentify: interrupted: ending the step under way and writing the best model so "
+              "far (Ctrl-C again to stop at once)\n");
+}
+
+void installInterruptHandlers(const std::string& out_path) {
+  std::snprintf(g_out_path, sizeof(g_out_path), "%s", out_path.c_str());
+  struct sigaction action {};
+  action.sa_handler = onInterrupt;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+/// When the run last printed a line, and a thread that prints a heartbeat line when a step has
+/// been silent for kHeartbeatS (a structure level, an output-error fit or a muscle step can
+/// run for minutes without a line of its own); silent itself with --quiet (`enabled` false).
+class Heartbeat {
+ public:
+  static constexpr double kHeartbeatS = 15.0;
+  explicit Heartbeat(bool enabled)
+      : enabled_(enabled), start_(Clock::now()), last_(start_), thread_([this] { loop(); }) {}
+  ~Heartbeat() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+  }
+  /// A line was printed: `what` (when not empty) names the step under way.
+  void printed(const std::string& what = "") {
+    std::lock_guard<std::mutex> lock(mutex_);
+    last_ = Clock::now();
+    if (!what.empty()) step_ = what;
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  void loop() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (!stop_) {
+      wake_.wait_for(lock, std::chrono::seconds(1));
+      if (stop_) break;
+      const double silent_s = std::chrono::duration<double>(Clock::now() - last_).count();
+      if (!enabled_ || silent_s < kHeartbeatS) continue;
+      const double total_s = std::chrono::duration<double>(Clock::now() - start_).count();
+      std::printf("identify: still working (%.0f s in all, %.0f s since the last line%s%s)\n", total_s,
+                  silent_s, step_.empty() ? "" : "; last: ", step_.c_str());
+      std::fflush(stdout);
+      last_ = Clock::now();
+    }
+  }
+  const bool enabled_;
+  Clock::time_point start_, last_;
+  std::string step_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool stop_ = false;
+  std::thread thread_;
+};
+
+// ------------------------------------------------------------------ progress
+
+/// "about 40 s left" from the generations' pace so far, capped by --max-time-s; the search may
+/// stop sooner (convergence), hence "at most".
+std::string timeLeft(const mme::Progress& p, int generations, double max_time_s) {
+  if (p.generation <= 0) return "";
+  double left_s = p.wall_time_s / p.generation * (generations - p.generation);
+  if (max_time_s > 0.0) left_s = std::min(left_s, std::max(0.0, max_time_s - p.wall_time_s));
+  char text[64];
+  std::snprintf(text, sizeof(text), ", at most ~%.0f s left", left_s);
+  return text;
+}
+
+/// The generation line: in place on a terminal (5 per second), a line every 2 s otherwise, with
+/// an estimate of the time left; notices (a widened bound, ...) to stderr even with --quiet.
+std::function<void(const mme::Progress&)> progressPrinter(const Command& c, Heartbeat* heartbeat) {
   const bool tty = isatty(STDOUT_FILENO);
   const bool quiet = c.quiet;
   const int generations = c.pipeline.identify.generations;
+  const double max_time_s = c.pipeline.identify.max_wall_time_s;
   auto last_print_s = std::make_shared<double>(-1.0);
   return [=](const mme::Progress& p) {
     if (!p.message.empty()) {
+      std::fflush(stdout);
       std::fprintf(stderr, "%sidentify: %s\n", tty && !quiet ? "\n" : "", p.message.c_str());
+      heartbeat->printed();
       return;
     }
     if (quiet) return;
     const bool last = p.generation == generations;
     if (!last && p.wall_time_s - *last_print_s < (tty ? 0.2 : 2.0)) return;
     *last_print_s = p.wall_time_s;
-    std::printf("%sgeneration %d/%d  evaluations %llu  cost %.6e  %.1f s%s", tty ? "\r" : "",
+    std::printf("%sgeneration %d/%d  evaluations %llu  cost %.6e  %.1f s%s%s", tty ? "\r" : "",
                 p.generation, generations, static_cast<unsigned long long>(p.evaluations),
-                p.best_cost, p.wall_time_s, tty ? "   " : "\n");
+                p.best_cost, p.wall_time_s, timeLeft(p, generations, max_time_s).c_str(),
+                tty ? "   " : "\n");
     std::fflush(stdout);
+    heartbeat->printed("generation " + std::to_string(p.generation));
   };
 }
 
+// ------------------------------------------------------------------ the model written
+
+/// The file's identification block for `result`, with the kind of model and why in it.
+mme::IdentificationInfo fileInfo(const mme::PipelineResult& result, const std::string& kind,
+                                 const std::string& why) {
+  mme::IdentificationInfo info = mme::identificationInfo(result.identified, result.notes);
+  info.model_kind = kind;
+  info.notes.push_back(kind + " model: " + why);
+  return info;
+}
+
+/// Why the passive model is the answer, in words, for the closing line and the file.
+std::string whyPassive(const mme::PipelineResult& result, const Command& c) {
+  if (result.cancelled) return "interrupted before the sensor muscles";
+  if (c.pipeline.sensor_muscles) {
+    if (!result.sensor_muscles) return "sensor muscles failed on these data (see the warning above)";
+    return "sensor muscles not kept (" + result.sensor_muscles->not_kept_because + ")";
+  }
+  std::string why = "sensor muscles not tried (off by default; --sensor-muscles 16 fits them)";
+  if (result.structure) {
+    // The held-out judgement the structure step already made: the chosen level against the
+    // model-free guesses, 10 frames ahead.
+    for (const mme::StructureCandidate& cand : result.structure->candidates) {
+      if (!cand.chosen || !std::isfinite(cand.held_out_rms_m[2])) continue;
+      const double cv = result.structure->guess_rms_m[0][2], ca = result.structure->guess_rms_m[1][2];
+      char text[240];
+      std::snprintf(text, sizeof(text), "; on the held-out frames it predicts 10 frames ahead in "
+                    "%.3g mm (constant velocity %.3g mm, constant acceleration %.3g mm)%s",
+                    1e3 * cand.held_out_rms_m[2], 1e3 * cv, 1e3 * ca,
+                    cand.held_out_rms_m[2] > std::min(cv, ca)
+                        ? ": a guess predicts better, sensor muscles may help" : "");
+      why += text;
+    }
+  }
+  return why;
+}
+
+/// The kind of the model the identification gives before sensor muscles: passive, or with the
+/// muscles --add-muscles placed on its springs.
+std::string baseKind(const mme::PipelineResult& result) {
+  return result.muscle_types > 0 ? "placed_muscles" : "passive";
+}
+std::string baseKindWords(const mme::PipelineResult& result) {
+  return result.muscle_types > 0 ? "a model with muscles on its springs" : "a passive model";
+}
+
+std::string modelSize(const mme::Model& model) {
+  return std::to_string(model.particles.size()) + " particles, " + std::to_string(model.bonds.size()) +
+         " bonds";
+}
+
 /// How the run talks while it goes: steps' lines and warnings, the structure's report kept as
-/// soon as it is chosen, the identification's opening line, the generations.
-void connectOutput(Command* c) {
+/// soon as it is chosen, the identification's opening line, the generations, and the passive
+/// model written as soon as it is identified.
+void connectOutput(Command* c, Heartbeat* heartbeat) {
   const bool quiet = c->quiet;
   mme::PipelineOptions& p = c->pipeline;
-  p.say = [quiet](const std::string& line) {
+  p.say = [quiet, heartbeat](const std::string& line) {
     if (!quiet) std::printf("identify: %s\n", line.c_str());
     std::fflush(stdout);
+    heartbeat->printed(line);
   };
-  p.warn = [](const std::string& line) {
+  p.warn = [heartbeat](const std::string& line) {
+    std::fflush(stdout);
     std::fprintf(stderr, "identify: warning: %s\n", line.c_str());
+    heartbeat->printed();
   };
   const std::string report_path = c->out_path + ".structure.csv";
-  p.structure_chosen = [report_path](const mme::StructureResult& selected) {
+  p.structure_chosen = [report_path, heartbeat](const mme::StructureResult& selected) {
     std::printf("%s", mme::formatStructureReport(selected).c_str());
     mme::writeFileAtomically(report_path, mme::structureReportCsv(selected));
     std::printf("identify: wrote %s\n", report_path.c_str());
+    heartbeat->printed();
   };
   const Command* command = c;
-  p.identification_starts = [command](const mme::Model& model, const mme::Trajectory& trajectory) {
+  p.identification_starts = [command, heartbeat](const mme::Model& model, const mme::Trajectory& trajectory) {
     const mme::IdentifyOptions& o = command->pipeline.identify;
     std::printf("identify: %d frames x %d markers at %g Hz, %zu free parameters, population %d, "
                 "preset %s (refinement %s from generation %d, every %d)\n",
@@ -226,8 +377,23 @@ void connectOutput(Command* c) {
                 mme::freeParameters(model).size(), o.es.population, mme::presetName(command->preset),
                 mme::refineAlgorithmName(o.es.refine_algorithm), o.es.refine_start_generation,
                 o.es.refine_period);
+    heartbeat->printed("the passive identification");
   };
-  p.progress = progressPrinter(*c);
+  p.passive_identified = [command, heartbeat](const mme::PipelineResult& result) {
+    mme::IdentificationInfo info = fileInfo(result, baseKind(result), result.cancelled
+                                                                   ? "interrupted: the best so far"
+                                                                   : "identified, sensor muscles not (yet) fitted");
+    mme::writeModelFile(command->out_path, result.model, &info);
+    g_passive_written.store(true);
+    if (command->pipeline.sensor_muscles && !result.cancelled) {
+      std::printf("identify: wrote %s (%s) to %s; the sensor muscles replace it if they predict "
+                  "better (Ctrl-C keeps it)\n", baseKindWords(result).c_str(),
+                  modelSize(result.model).c_str(), command->out_path.c_str());
+      heartbeat->printed("the sensor muscles");
+    }
+  };
+  p.progress = progressPrinter(*c, heartbeat);
+  p.cancel = &g_cancel;
 }
 
 /// The table of identified values with their units (from the catalogue); a std that could not
@@ -282,21 +448,50 @@ void printSummary(const mme::IdentifyResult& r, const Command& c) {
               mme::refineStatusName(r.last_refine_status));
 }
 
-int run(int argc, char** argv) {
-  mme::CliArgs args(argc, argv,
-                    {"model", "trajectory", "topic", "out", "method", "generations", "population",
-                     "window-frames", "first-frame", "frames", "seed", "threads", "target-cost",
-                     "max-time-s", "refine", "refine-start", "refine-period", "preset", "patience", "cost", "segment-frames",
-                     "grow-segments", "add-muscles", "muscle-hidden", "sensor-muscles",
-                     "muscle-neighbours", "rollout-rounds", "muscle-anchors", "anchor-stiffness",
-                     "muscles-max-time-s"},
-                    {"compare-to-model", "quiet", "help", "select-structure"});
-  if (args.has("help")) {
-    std::cout << kUsage;
-    return 0;
+
+/// The frames used, both ways: --first-frame counts the file's frames from 0, while a file's own
+/// frame numbers (a TRC's Frame# column) often start at 1.
+void printFramesUsed(const mme::CliArgs& args, const mme::Trajectory& data, const mme::Trajectory& used) {
+  const long first = args.getInt("first-frame", 0, 0, 100000000);
+  const long last = first + used.numFrames() - 1;
+  std::printf("identify: frames %ld..%ld of %d used (counted from 0)%s\n", first, last, data.numFrames(),
+              mme::fileFrameNumbers(data, first, last).c_str());
+}
+
+/// The closing lines: which kind of model was written and why; the exit code (128 + the
+/// signal when interrupted).
+int finish(const mme::PipelineResult& result, const Command& c) {
+  const bool muscles_kept = result.sensor_muscles && result.sensor_muscles->better_than_passive &&
+                            !result.sensor_muscle_summary.empty() && !result.cancelled;
+  if (muscles_kept) {
+    const mme::SensorMuscleResult& sm = *result.sensor_muscles;
+    char why[200];
+    std::snprintf(why, sizeof(why), "they predict %d frames ahead in %.3g mm against %.3g mm passive",
+                  c.pipeline.sensor_muscles->horizon_frames, 1e3 * sm.validation_rms_m, 1e3 * sm.passive_rms_m);
+    const mme::IdentificationInfo info = fileInfo(result, "sensor_muscles", why);
+    mme::writeModelFile(c.out_path, result.model, &info);
+    std::printf("identify: wrote sensor muscles (%d sensors, %d muscles; %s) to %s: %s\n", sm.sensors,
+                sm.muscles, modelSize(result.model).c_str(), c.out_path.c_str(), why);
+  } else {
+    const std::string why = whyPassive(result, c);
+    const mme::IdentificationInfo info = fileInfo(result, baseKind(result), why);
+    mme::writeModelFile(c.out_path, result.model, &info);
+    std::printf("identify: wrote %s (%s) to %s: %s\n", baseKindWords(result).c_str(),
+                modelSize(result.model).c_str(), c.out_path.c_str(), why.c_str());
   }
+  if (!result.cancelled) return 0;
+  std::printf("identify: interrupted: %s holds the best model found before the interruption "
+              "(exit %d)\n", c.out_path.c_str(), 128 + g_signal.load());
+  return 128 + g_signal.load();
+}
+
+int run(int argc, char** argv) {
+  const mme::CliSpec spec = mme::identifyCliSpec();
+  if (mme::printHelpIfAsked(argc, argv, spec)) return 0;
+  const mme::CliArgs args(argc, argv, spec);
   Command c = parseCommand(args);
-  connectOutput(&c);
+  Heartbeat heartbeat(!c.quiet);
+  connectOutput(&c, &heartbeat);
 
   mme::Model model;
   if (!c.model_path.empty()) model = mme::loadModelFile(c.model_path);
@@ -316,7 +511,9 @@ int run(int argc, char** argv) {
     for (const mme::ParamRef& ref : mme::freeParameters(model)) mme::paramOf(model, ref).has_value = false;
   const mme::Trajectory trajectory =
       mme::fitTrajectoryToModel("identify", c.trajectory_path, data, args, &model);
+  printFramesUsed(args, data, trajectory);
 
+  installInterruptHandlers(c.out_path);
   const mme::PipelineResult result = mme::runPipeline(model, trajectory, c.pipeline);
   if (isatty(STDOUT_FILENO) && !c.quiet) std::printf("\n");
   printParameterTable(result.identified, reference, c.compare);
@@ -335,9 +532,7 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "identify: warning: %zu parameter(s) ended within 1 %% of a search bound "
                  "(flag column); the answer may lie beyond: give wider min/max in the model file\n",
                  info.flags.size());
-  mme::writeModelFile(c.out_path, result.model, &info);
-  std::printf("identify: wrote %s\n", c.out_path.c_str());
-  return 0;
+  return finish(result, c);
 }
 
 }  // namespace

@@ -24,6 +24,12 @@ std::string nameList(const std::vector<std::string>& names) {
 
 }  // namespace
 
+std::string fileFrameNumbers(const Trajectory& data, long first, long last) {
+  if (first < 0 || last < first || static_cast<size_t>(last) >= data.frame_numbers.size()) return "";
+  const unsigned long a = data.frame_numbers[first], b = data.frame_numbers[last];
+  return "; the file's Frame# " + std::to_string(a) + (a == b ? "" : ".." + std::to_string(b));
+}
+
 Trajectory readToolTrajectory(const char* tool, const std::string& path, const std::string& topic) {
   std::vector<std::string> warnings;
   Trajectory data = readTrajectory(path, topic, &warnings);

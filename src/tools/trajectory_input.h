@@ -25,6 +25,10 @@ Trajectory loadModelTrajectory(const char* tool, const std::string& path, const 
 
 /// The two halves of loadModelTrajectory: the file read (any kind; warnings to stderr), and the
 /// data matched to the model and cut to the frames asked for (`path` names the file in errors).
+/// "; the file's Frame# A..B" for frames first..last counted from 0, when the file numbers its
+/// frames (else ""): --first-frame counts from 0, a TRC's Frame# column often from 1.
+std::string fileFrameNumbers(const Trajectory& data, long first, long last);
+
 Trajectory readToolTrajectory(const char* tool, const std::string& path, const std::string& topic);
 Trajectory fitTrajectoryToModel(const char* tool, const std::string& path, const Trajectory& data,
                                 const CliArgs& args, Model* model, int history = 0,

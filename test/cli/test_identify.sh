@@ -66,7 +66,7 @@ grep -q "frames: 14" "$tmp/cut.yaml" || { echo "cut.yaml does not record 14 fram
 "$bin/simulate" --scene paper_object --frames 150 --out "$tmp/long.trc" >/dev/null
 sed '/^bond_types:/,$d' "$tmp/truth.yaml" >"$tmp/particles.yaml"
 "$bin/identify" --model "$tmp/particles.yaml" --trajectory "$tmp/long.trc" --out "$tmp/sel.yaml" \
-  --select-structure >"$tmp/sel.log" 2>"$tmp/sel.err" ||
+  --select-structure --sensor-muscles 16 >"$tmp/sel.log" 2>"$tmp/sel.err" ||
   { echo "identify --select-structure failed:"; cat "$tmp/sel.err"; exit 1; }
 grep -q "^springs,31,10,20,.*,1,1,$" "$tmp/sel.yaml.structure.csv" ||
   { echo "structure report:"; cat "$tmp/sel.yaml.structure.csv"; exit 1; }
@@ -80,11 +80,19 @@ bond_pairs() {  # the sorted particle pairs of a model file's bonds
   { echo "selected bonds differ from the truth's"; diff <(bond_pairs "$tmp/sel.yaml") <(bond_pairs "$tmp/truth.yaml"); exit 1; }
 [ "$(grep -c "kind: spring" "$tmp/sel.yaml")" -eq 10 ]
 if grep -q "damping:" "$tmp/sel.yaml"; then echo "a damper was selected on springs-only data"; exit 1; fi
-# The sensor muscles ran (on by default with --select-structure) and were not kept: the passive
-# model already explains these data, and a fit of its residue is not 1 % of the motion's scale
-# better.
+# The sensor muscles ran (asked for) and were not kept: the passive model already explains these
+# data, and a fit of its residue is not 1 % of the motion's scale better.
 grep -q "warning: the sensor muscles are not kept (its validation error .* is not below the passive model's .* by .*, 1 % of the larger" \
   "$tmp/sel.err" || { echo "sensor muscles on controller-free data:"; grep "sensor muscles" "$tmp/sel.log" "$tmp/sel.err"; exit 1; }
+# The passive model was written before the sensor muscles' first step, and the closing line says
+# which kind the file holds and why.
+awk -v out="$tmp/sel.yaml" '
+  index($0, "identify: wrote a passive model (15 particles, 31 bonds) to " out "; the sensor muscles replace it") == 1 { written = NR }
+  /^identify: sensor muscles: / && !first_step { first_step = NR }
+  END { exit !(written && first_step > written) }' "$tmp/sel.log" ||
+  { echo "the passive model was not written first:"; grep "wrote\|sensor muscles" "$tmp/sel.log"; exit 1; }
+grep -q "^identify: wrote a passive model (15 particles, 31 bonds) to $tmp/sel.yaml: sensor muscles not kept (" "$tmp/sel.log" ||
+  { echo "no 'which kind and why' line:"; grep "wrote" "$tmp/sel.log"; exit 1; }
 
 # --grow-segments: the output error on noisy data (0.1 mm) grown from the first 2 segments' frames
 # (21, then 41, then all 60 frames: 3 stages), every parameter within 1 % of the truth (the worst

@@ -4,6 +4,8 @@
 // `identification:` block says what the result holds.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -80,6 +82,60 @@ TEST(IdentifyPipeline, SensorMusclesTheDataCannotFeedLeaveThePassiveModel) {
   EXPECT_EQ(r.notes.back().rfind("sensor muscles: none (", 0), 0u) << r.notes.back();
   EXPECT_EQ(r.model.bonds.size(), truth.bonds.size());
   EXPECT_EQ(mme::muscleTypeCount(r.model), 0);
+}
+
+// The model written starts where the data do: the first frame's positions, and the velocity
+// that lands one simulated frame on the second frame, so that simulating it replays the data
+// from their first frame.
+TEST(IdentifyPipeline, TheModelStartsAtTheFirstFrame) {
+  const mme::Model truth = mme::test::smallObject();
+  const mme::Trajectory whole = mme::simulateTrajectory(truth, 60, truth.frame_rate_hz);
+  const mme::Trajectory data = mme::sliceFrames(whole, 7, 40);
+  const mme::PipelineResult r = mme::runPipeline(mme::test::withoutValues(truth), data, quickOptions());
+  ASSERT_EQ(r.model.particles.size(), truth.particles.size());
+  const mme::Trajectory replay = mme::simulateTrajectory(r.model, 2, truth.frame_rate_hz);
+  double off_difference = 0.0;
+  for (int i = 0; i < data.numMarkers(); ++i) {
+    EXPECT_TRUE(r.model.particles[i].position_m.isApprox(data.position(0, i), 1e-12)) << i;
+    EXPECT_LT((replay.position(1, i) - data.position(1, i)).norm(), 1e-12) << i;
+    const Eigen::Vector3d difference = (data.position(1, i) - data.position(0, i)) * truth.frame_rate_hz;
+    off_difference = std::max(off_difference, (r.model.particles[i].velocity_mps - difference).norm());
+  }
+  EXPECT_GT(off_difference, 0.0);  // not the plain frame difference, which misses by h^2 a
+  mme::Model fixed_first = truth;
+  fixed_first.particles[0].fixed = true;
+  mme::startAtFrame(data, 3, &fixed_first);
+  EXPECT_EQ(fixed_first.particles[0].position_m, truth.particles[0].position_m);  // held where it is
+  EXPECT_TRUE(fixed_first.particles[1].position_m.isApprox(data.position(3, 1), 1e-12));
+  EXPECT_THROW(mme::startAtFrame(data, data.numFrames(), &fixed_first), mme::InputError);
+}
+
+// A raised cancel flag (Ctrl-C): the structure and the search end at once with their best so
+// far, the passive model is handed on (to be written), and the sensor muscles do not start.
+TEST(IdentifyPipeline, CancelEndsWithAPassiveModelAndNoMuscles) {
+  const mme::Model truth = smallRandomObject();
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 100, truth.frame_rate_hz);
+  mme::PipelineOptions o = quickOptions();
+  o.identify.generations = 100000;
+  o.identify.patience_generations = 0;
+  o.select_structure = true;
+  o.sensor_muscles = mme::SensorMuscleOptions();
+  std::atomic<bool> cancel{true};
+  o.cancel = &cancel;
+  int passive_calls = 0;
+  o.passive_identified = [&](const mme::PipelineResult& r) {
+    ++passive_calls;
+    EXPECT_TRUE(r.cancelled);
+    EXPECT_FALSE(r.model.bonds.empty());
+  };
+  const mme::PipelineResult r = mme::runPipeline(mme::test::particlesOnly(truth), data, o);
+  EXPECT_TRUE(r.cancelled);
+  EXPECT_EQ(passive_calls, 1);
+  EXPECT_EQ(r.identified.stop, mme::IdentifyStop::kCancelled);
+  EXPECT_STREQ(mme::identifyStopName(r.identified.stop), "interrupted");
+  EXPECT_LE(r.identified.generations, 1);
+  EXPECT_FALSE(r.sensor_muscles.has_value());
+  for (double v : r.identified.values) EXPECT_TRUE(std::isfinite(v));
 }
 
 TEST(IdentifyPipeline, MusclesNeedASpringType) {

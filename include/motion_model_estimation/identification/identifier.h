@@ -3,6 +3,7 @@
 // estimates a 1-sigma uncertainty per parameter.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -40,6 +41,10 @@ struct IdentifyOptions {
   int generations = 1000;        ///< generation budget
   double target_cost = 0.0;      ///< stop once the global cost [m^2] is <= it (0 = never)
   double max_wall_time_s = 0.0;  ///< stop after this wall time (0 = no limit)
+  /// Raised by another thread or a signal handler (e.g. Ctrl-C): the search stops after the
+  /// generation or refinement under way with its best so far (IdentifyStop::kCancelled) and the
+  /// output error is not started (one under way stops after its iteration). May be null.
+  const std::atomic<bool>* cancel = nullptr;
   bool estimate_std = true;      ///< finite-difference Hessian at the optimum
   /// Stop once converged: after a refinement has run, when the best cost fell by less than a
   /// relative 1e-4 over this many generations, or sits at the round-off floor (1e-26 m^2 per
@@ -66,7 +71,7 @@ IdentifyOptions identifyOptionsFor(Preset preset);
 
 /// Why identifyModel stopped. kWallTime also when the time limit cut the output-error fit after
 /// the search had converged: a cut fit is never reported as converged.
-enum class IdentifyStop { kGenerations, kTargetCost, kWallTime, kConverged };
+enum class IdentifyStop { kGenerations, kTargetCost, kWallTime, kConverged, kCancelled };
 const char* identifyStopName(IdentifyStop stop);
 
 struct Progress {

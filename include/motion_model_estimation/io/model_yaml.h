@@ -19,6 +19,9 @@ Model loadModelString(const std::string& yaml, const std::string& source_name);
 /// Identification results attached to an export (SPEC section 4).
 struct IdentificationInfo {
   std::string method;
+  /// Which kind of model the file holds ("passive", "sensor_muscles"); written as `model_kind:`
+  /// (empty: no key).
+  std::string model_kind;
   double global_cost = 0.0;
   int frames = 0;
   int generations = 0;

@@ -5,6 +5,7 @@
 // the order of the steps and what each hands to the next live here and nowhere else.
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <optional>
 #include <string>
@@ -18,6 +19,8 @@
 #include "motion_model_estimation/identification/structure/structure_selection.h"
 
 namespace mme {
+
+struct PipelineResult;
 
 /// Which steps run and how. Each optional step runs when its options are set.
 struct PipelineOptions {
@@ -43,6 +46,15 @@ struct PipelineOptions {
   std::function<void(const StructureResult&)> structure_chosen;
   /// With the model and data the passive identification is about to search; may be empty.
   std::function<void(const Model&, const Trajectory&)> identification_starts;
+  /// Right after the passive identification, before the sensor muscles, with the result so far
+  /// (`model` the passive model with its initial state): e.g. to write the passive model first,
+  /// so that a long or interrupted muscle fit leaves a usable file. May be empty.
+  std::function<void(const PipelineResult&)> passive_identified;
+  /// Raised by another thread or a signal handler (e.g. Ctrl-C): the step under way ends as
+  /// soon as it can with its best so far (the structure as when its time limit is spent, the
+  /// passive search after its generation), and no later step starts except the passive
+  /// identification's (so that there is a model to write). May be null.
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 /// "" when the options can run, else what is wrong, naming the option.
@@ -57,6 +69,7 @@ struct PipelineResult {
   std::optional<SensorMuscleResult> sensor_muscles;  ///< the sensor muscles' fit, when it ran
   std::string sensor_muscle_summary;  ///< one line on that fit (empty when it did not run)
   std::vector<std::string> notes;     ///< written into the file's `identification: notes:`
+  bool cancelled = false;             ///< PipelineOptions::cancel cut the run short
 };
 
 // ------------------------------------------------------------------ the steps, in order
@@ -83,6 +96,15 @@ IdentifyResult identifyPassive(const Model& model, const Trajectory& trajectory,
 /// Fills result->sensor_muscles, sensor_muscle_summary and, where kept, result->model.
 void fitSensorMuscleStep(const Trajectory& trajectory, const PipelineOptions& options,
                          PipelineResult* result);
+
+/// Step 6: the particles' initial state from frame `frame` of `trajectory` (which holds the
+/// model's particles as markers, remapMarkers), so that the model plays from where the data
+/// are: a free particle seen there starts at its position [m] and, when also seen in the next
+/// frame, with the velocity [m/s] that makes one simulated frame land on it (the frame
+/// difference corrected for the integrator; the frame difference itself when the model cannot
+/// be simulated); fixed particles (anchors, ground points) and particles not seen keep the
+/// model's. InputError when `frame` is outside the data.
+void startAtFrame(const Trajectory& trajectory, int frame, Model* model);
 
 /// Every step the options ask for, in order, from `model` (a model file's, or startingModel's)
 /// and the trajectory matched to its particles.

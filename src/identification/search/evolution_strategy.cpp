@@ -363,6 +363,7 @@ RefineSettings EvolutionStrategy::refineSettings() const {
   settings.window_evaluations = refineWindow();
   settings.stall_factor = options_.refine_stall_factor;
   settings.deadline = deadline_;
+  settings.cancel = cancel_;
   if (options_.refine_smooth_genes_only) {
     settings.movable.assign(space_.size(), 0);
     for (size_t k = 0; k < space_.size(); ++k) settings.movable[k] = space_.gene(k).smooth;

@@ -2,10 +2,12 @@
 // reads it between its steps rather than interrupting them, so that a step under way (one
 // solve, one refit bounded by what is left) still ends and leaves a consistent state; the steps
 // decide for themselves what a spent limit means to them (give a level up, or end the first
-// level on what it has).
+// level on what it has). A raised cancel flag (identify.cancel, e.g. Ctrl-C) reads as a spent
+// limit, so that an interrupted selection ends the same way.
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <limits>
 
@@ -15,12 +17,14 @@ namespace structure {
 /// The selection's wall-time limit (0 = none), started when constructed.
 class Deadline {
  public:
-  explicit Deadline(double max_s) : max_s_(max_s), start_(std::chrono::steady_clock::now()) {}
+  explicit Deadline(double max_s, const std::atomic<bool>* cancel = nullptr)
+      : max_s_(max_s), cancel_(cancel), start_(std::chrono::steady_clock::now()) {}
   double elapsedS() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   }
   bool limited() const { return max_s_ > 0.0; }
-  bool passed() const { return limited() && elapsedS() >= max_s_; }
+  bool cancelled() const { return cancel_ && cancel_->load(); }
+  bool passed() const { return cancelled() || (limited() && elapsedS() >= max_s_); }
   /// [s] left; infinite without a limit.
   double remainingS() const {
     return limited() ? std::max(0.0, max_s_ - elapsedS()) : std::numeric_limits<double>::infinity();
@@ -29,6 +33,7 @@ class Deadline {
 
  private:
   double max_s_;
+  const std::atomic<bool>* cancel_;
   std::chrono::steady_clock::time_point start_;
 };
 

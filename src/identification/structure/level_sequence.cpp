@@ -121,9 +121,14 @@ class LevelSequence {
   void stopByTime(const std::string& where) {
     ctx_.result->stopped_by_time = true;
     char line[200];
-    std::snprintf(line, sizeof(line), "the time limit (%.3g s) stopped the selection %s after %zu "
-                  "level(s) (%.1f s): the best level judged so far is chosen",
-                  ctx_.deadline.maxS(), where.c_str(), candidates_.size(), ctx_.deadline.elapsedS());
+    if (ctx_.deadline.cancelled())
+      std::snprintf(line, sizeof(line), "interrupted: the selection stopped %s after %zu level(s) "
+                    "(%.1f s): the best level judged so far is chosen",
+                    where.c_str(), candidates_.size(), ctx_.deadline.elapsedS());
+    else
+      std::snprintf(line, sizeof(line), "the time limit (%.3g s) stopped the selection %s after %zu "
+                    "level(s) (%.1f s): the best level judged so far is chosen",
+                    ctx_.deadline.maxS(), where.c_str(), candidates_.size(), ctx_.deadline.elapsedS());
     ctx_.say(std::string("structure: ") + line);
     ctx_.result->notes.push_back(line);
   }

@@ -112,7 +112,7 @@ HeldOutSplit splitHeldOut(const Trajectory& data, double held_out_share, const s
 StructureResult selectStructure(const Model& given, const Trajectory& data,
                                 const StructureOptions& options) {
   const Model model = withFrameRate(given, data);
-  const structure::Deadline deadline(options.max_wall_time_s);
+  const structure::Deadline deadline(options.max_wall_time_s, options.identify.cancel);
   requireSelectable(model);
   const HeldOutSplit split = splitHeldOut(data, options.held_out_share, "structure selection");
   StructureResult result;

@@ -4,6 +4,7 @@
 // cost function can be swapped for a newer window while the population lives on (warm start).
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -100,6 +101,8 @@ class EvolutionStrategy {
   bool offer(const std::vector<double>& genes);
   /// A refinement running past this time stops there (keeping its best point); default: none.
   void setDeadline(std::chrono::steady_clock::time_point deadline) { deadline_ = deadline; }
+  /// A refinement stops (keeping its best point) once `cancel` is raised; default: none.
+  void setCancel(const std::atomic<bool>* cancel) { cancel_ = cancel; }
 
   const Individual& best() const;
   std::vector<double> bestValues() const;  ///< physical values of the best individual
@@ -168,6 +171,7 @@ class EvolutionStrategy {
   static constexpr int kThresholdRounds = 3;
   /// Refinements stop here (setDeadline); default: never.
   std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
+  const std::atomic<bool>* cancel_ = nullptr;  ///< setCancel
 };
 
 }  // namespace mme
