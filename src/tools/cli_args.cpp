@@ -1,5 +1,8 @@
 #include "cli_args.h"
 
+#include <limits.h>
+#include <stdlib.h>
+
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -139,6 +142,16 @@ std::vector<int> parseCountList(const std::string& text, const std::string& opti
   }
   if (out.empty()) throw InputError(option + ": empty (e.g. " + example + ")");
   return out;
+}
+
+std::string absolutePath(const std::string& path) {
+  char buffer[PATH_MAX];
+  return ::realpath(path.c_str(), buffer) ? std::string(buffer) : path;
+}
+
+std::string rvizCommand(const std::string& model_path, const std::string& trajectory_path) {
+  return "roslaunch motion_model_estimation replay.launch model:=" + absolutePath(model_path) +
+         " bag:=" + absolutePath(trajectory_path) + " estimate:=false rviz:=true";
 }
 
 }  // namespace mme

@@ -67,4 +67,12 @@ int runTool(const char* tool, int (*run)(int, char**), int argc, char** argv);
 /// returns 0). The help is printed before any other check so that it always works.
 bool printHelpIfAsked(int argc, char** argv, const CliSpec& spec);
 
+/// `path` made absolute (roslaunch starts nodes in the ROS home, so a printed command must not
+/// depend on the shell's directory); `path` itself when it cannot be resolved.
+std::string absolutePath(const std::string& path);
+
+/// The command that shows `model_path` as it is in rviz, played against the capture
+/// `trajectory_path` (replay.launch with estimate:=false): the last step of every tool's output.
+std::string rvizCommand(const std::string& model_path, const std::string& trajectory_path);
+
 }  // namespace mme

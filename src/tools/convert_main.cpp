@@ -108,6 +108,8 @@ int run(int argc, char** argv) {
     std::printf("convert: wrote %s (%zu particles, free gravity, no bonds)\n",
                 args.get("particles-out").c_str(), particles.particles.size());
   }
+  std::printf("convert: next: a model of the capture: identify --select-structure --trajectory %s "
+              "--out MODEL.yaml\n", mme::absolutePath(in).c_str());
   return 0;
 }
 

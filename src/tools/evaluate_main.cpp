@@ -137,6 +137,8 @@ int run(int argc, char** argv) {
     mme::writeFileAtomically(args.get("csv"), csv.str());
     std::printf("evaluate: wrote %s\n", args.get("csv").c_str());
   }
+  std::printf("evaluate: next: see it in rviz: %s\n",
+              mme::rvizCommand(model_path, args.get("trajectory")).c_str());
   return 0;
 }
 

@@ -458,9 +458,24 @@ void printFramesUsed(const mme::CliArgs& args, const mme::Trajectory& data, cons
               mme::fileFrameNumbers(data, first, last).c_str());
 }
 
-/// The closing lines: which kind of model was written and why; the exit code (128 + the
-/// signal when interrupted).
-int finish(const mme::PipelineResult& result, const Command& c) {
+/// What to do with the written model: judge it on the frames after the ones used (when the
+/// file has more), and see it in rviz.
+std::string nextSteps(const mme::CliArgs& args, const Command& c, const mme::Trajectory& data,
+                      const mme::Trajectory& used) {
+  const long after = args.getInt("first-frame", 0, 0, 100000000) + used.numFrames();
+  std::string judge;
+  if (after + 10 < data.numFrames())
+    judge = "judge it on frames it did not see: evaluate --model " + c.out_path + " --trajectory " +
+            c.trajectory_path + " --first-frame " + std::to_string(after) + " --history 20; ";
+  else
+    judge = "(every frame of the file was used: identify on fewer, --frames N, to keep some for "
+            "evaluate) ";
+  return "identify: next: " + judge + "see it in rviz: " + mme::rvizCommand(c.out_path, c.trajectory_path);
+}
+
+/// The closing lines: which kind of model was written and why, and what to do next; the exit
+/// code (128 + the signal when interrupted).
+int finish(const mme::PipelineResult& result, const Command& c, const std::string& next) {
   const bool muscles_kept = result.sensor_muscles && result.sensor_muscles->better_than_passive &&
                             !result.sensor_muscle_summary.empty() && !result.cancelled;
   if (muscles_kept) {
@@ -479,6 +494,7 @@ int finish(const mme::PipelineResult& result, const Command& c) {
     std::printf("identify: wrote %s (%s) to %s: %s\n", baseKindWords(result).c_str(),
                 modelSize(result.model).c_str(), c.out_path.c_str(), why.c_str());
   }
+  if (!c.quiet) std::printf("%s\n", next.c_str());
   if (!result.cancelled) return 0;
   std::printf("identify: interrupted: %s holds the best model found before the interruption "
               "(exit %d)\n", c.out_path.c_str(), 128 + g_signal.load());
@@ -532,7 +548,7 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "identify: warning: %zu parameter(s) ended within 1 %% of a search bound "
                  "(flag column); the answer may lie beyond: give wider min/max in the model file\n",
                  info.flags.size());
-  return finish(result, c);
+  return finish(result, c, nextSteps(args, c, data, trajectory));
 }
 
 }  // namespace

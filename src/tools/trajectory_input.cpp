@@ -65,7 +65,14 @@ Trajectory fitTrajectoryToModel(const char* tool, const std::string& path, const
   if (model_only) *model_only = static_cast<int>(missing.size());
   const int total = trajectory.numFrames();
   const int first = static_cast<int>(args.getInt("first-frame", 0, 0, total - 1));
-  long count = args.getInt("frames", total - first, 1, total - first);
+  // More frames than the file holds after --first-frame: all of them, said (a README command
+  // written for long captures still runs on a short one).
+  long count = args.getInt("frames", total - first, 1, 100000000);
+  if (count > total - first) {
+    std::printf("%s: --frames %ld: %s has %d frames from frame %d on; all %d used\n", tool, count,
+                path.c_str(), total - first, first, total - first);
+    count = total - first;
+  }
   if (args.has("window-frames"))
     count = std::min<long>(count, args.getInt("window-frames", count, 1, 100000000));
   const int before = std::min(std::max(history, 0), first);

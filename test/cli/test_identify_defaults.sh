@@ -72,6 +72,12 @@ grep -q "^identify: wrote a passive model (15 particles, 31 bonds) to $tmp/sel.y
 ! grep -q "sensor muscles:" "$tmp/sel.log" || fail "sensor muscles fitted by default"
 ! grep -q "kind: muscle\|name: anchor_" "$tmp/sel.yaml" || fail "a muscle or an anchor in the default model"
 grep -q "model_kind: passive" "$tmp/sel.yaml" || fail "the file does not say which kind it holds"
+# Every step's output says what to do next, down to rviz: identify (it used every frame here, so
+# it says how to keep some for evaluate), a fit on fewer frames (evaluate on the frames after
+# them), evaluate and convert.
+rviz="roslaunch motion_model_estimation replay.launch model:=$tmp/sel.yaml bag:=$tmp/long.trc estimate:=false rviz:=true"
+grep -q -F "identify: next: (every frame of the file was used: identify on fewer, --frames N, to keep some for evaluate) see it in rviz: $rviz" \
+  "$tmp/sel.log" || fail "identify names no next step: $(grep next "$tmp/sel.log")"
 
 # ---------------------------------------------------------------- frames, progress, initial state
 # Frames 5..64 counted from 0 are this TRC's Frame# 6..65; the model written starts at Frame# 6.
@@ -80,6 +86,14 @@ grep -q "model_kind: passive" "$tmp/sel.yaml" || fail "the file does not say whi
   fail "identify --first-frame: $(cat "$tmp/cut.err")"
 grep -q "^identify: frames 5..64 of 150 used (counted from 0); the file's Frame# 6..65" "$tmp/cut.log" ||
   fail "frame numbering not stated: $(grep frames "$tmp/cut.log")"
+grep -q -F "identify: next: judge it on frames it did not see: evaluate --model $tmp/cut.yaml --trajectory $tmp/long1.trc --first-frame 65 --history 20; see it in rviz:" \
+  "$tmp/cut.log" || fail "identify on fewer frames names no evaluate step: $(grep next "$tmp/cut.log")"
+"$bin/evaluate" --model "$tmp/cut.yaml" --trajectory "$tmp/long1.trc" --first-frame 65 --history 20 >"$tmp/ev.log"
+grep -q -F "evaluate: next: see it in rviz: roslaunch motion_model_estimation replay.launch model:=$tmp/cut.yaml bag:=$tmp/long1.trc estimate:=false rviz:=true" \
+  "$tmp/ev.log" || fail "evaluate names no next step: $(tail -n 2 "$tmp/ev.log")"
+"$bin/convert" --trajectory "$tmp/long1.trc" --out "$tmp/conv.trc" >"$tmp/conv.log"
+grep -q -F "convert: next: a model of the capture: identify --select-structure --trajectory $tmp/long1.trc --out MODEL.yaml" \
+  "$tmp/conv.log" || fail "convert names no next step: $(tail -n 2 "$tmp/conv.log")"
 grep -E -q "^generation 20/20 .* s, at most ~[0-9]+ s left$" "$tmp/cut.log" ||
   fail "no time-left estimate: $(grep generation "$tmp/cut.log")"
 "$bin/simulate" --model "$tmp/cut.yaml" --frames 2 --out "$tmp/played.trc" >/dev/null
