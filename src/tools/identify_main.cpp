@@ -294,6 +294,28 @@ std::function<void(const mme::Progress&)> progressPrinter(const Command& c, Hear
   };
 }
 
+/// The output error's iterations, a line every 5 s at most (a fit can run for minutes): the
+/// iteration of the stage under way and the time it leaves at its pace so far (a stage may end
+/// sooner, on convergence or the time limit).
+std::function<void(int, int, double)> outputErrorPrinter(const Command& c, Heartbeat* heartbeat) {
+  using Clock = std::chrono::steady_clock;
+  auto last_print = std::make_shared<Clock::time_point>(Clock::now());
+  auto stage_start_s = std::make_shared<double>(0.0);
+  const bool quiet = c.quiet;
+  return [=](int iteration, int max_iterations, double elapsed_s) {
+    if (iteration == 1) *stage_start_s = elapsed_s;  // the pace is measured from here
+    const double since_print_s = std::chrono::duration<double>(Clock::now() - *last_print).count();
+    if (quiet || iteration == 1 || since_print_s < 5.0) return;
+    *last_print = Clock::now();
+    const double per_iteration_s = (elapsed_s - *stage_start_s) / std::max(1, iteration - 1);
+    std::printf("identify: output error: iteration %d/%d, %.0f s, at most ~%.0f s left in this "
+                "stage\n", iteration, max_iterations, elapsed_s,
+                per_iteration_s * std::max(0, max_iterations - iteration));
+    std::fflush(stdout);
+    heartbeat->printed("output error iteration " + std::to_string(iteration));
+  };
+}
+
 // ------------------------------------------------------------------ the model written
 
 /// The file's identification block for `result`, with the kind of model and why in it.
@@ -393,6 +415,7 @@ void connectOutput(Command* c, Heartbeat* heartbeat) {
     }
   };
   p.progress = progressPrinter(*c, heartbeat);
+  p.identify.output_error.progress = outputErrorPrinter(*c, heartbeat);
   p.cancel = &g_cancel;
 }
 

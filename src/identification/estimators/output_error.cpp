@@ -287,6 +287,21 @@ class CancelCallback final : public ceres::IterationCallback {
   const std::atomic<bool>* flag_;
 };
 
+/// Hands every iteration to the caller's progress hook.
+class ProgressCallback final : public ceres::IterationCallback {
+ public:
+  ProgressCallback(const OutputErrorOptions& options, const std::function<double()>& elapsed_s)
+      : options_(options), elapsed_s_(elapsed_s) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    if (summary.iteration > 0) options_.progress(summary.iteration, options_.max_iterations, elapsed_s_());
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const OutputErrorOptions& options_;
+  const std::function<double()>& elapsed_s_;
+};
+
 /// Start state of frame t from the data: the position, and the velocity x h from a central
 /// difference (one-sided at the ends, 0 where a neighbour is occluded).
 void dataState(const Problem& p, int t, double* state) {
@@ -460,6 +475,8 @@ int solveWithContinuation(Problem* p, const OutputErrorOptions& options, double 
   if (options.max_time_s > 0.0) solver.max_solver_time_in_seconds = std::max(1e-3, options.max_time_s - elapsed_s());
   CancelCallback cancel(options.cancel);
   if (options.cancel) solver.callbacks.push_back(&cancel);
+  ProgressCallback progress(options, elapsed_s);
+  if (options.progress) solver.callbacks.push_back(&progress);
   int first_stage_iterations = 0;
   const double hard_w_cont = p->w_cont;
   if (options.first_continuity_weight > 0.0 && options.first_continuity_weight != options.continuity_weight) {

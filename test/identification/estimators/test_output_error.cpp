@@ -110,6 +110,38 @@ TEST(OutputError, OccludedSamplesDoNotCount) {
   EXPECT_LT(maxRelativeError(a.values, n.true_values), 0.01);
 }
 
+// The progress hook hears every iteration of every stage, in order within a stage, with the
+// stage's iteration budget and a wall time that never goes back; the answer is the same as
+// without it (a tool's progress line cannot change the fit).
+TEST(OutputError, TheProgressHookHearsEveryIterationWithoutChangingTheAnswer) {
+  Noisy n;
+  const mme::Trajectory data = n.noisy(1e-4, 11);
+  const mme::ParameterSpace space(n.search, data);
+  const std::vector<double> start = n.offStart(space, 0.05);
+  mme::OutputErrorOptions o;
+  o.estimate_std = false;
+  const mme::OutputErrorResult plain = mme::estimateOutputError(n.search, data, space, start, o);
+  std::vector<int> iterations;
+  double last_elapsed_s = 0.0;
+  bool time_went_back = false, wrong_budget = false;
+  o.progress = [&](int iteration, int max_iterations, double elapsed_s) {
+    iterations.push_back(iteration);
+    time_went_back = time_went_back || elapsed_s < last_elapsed_s;
+    wrong_budget = wrong_budget || max_iterations != o.max_iterations;
+    last_elapsed_s = elapsed_s;
+  };
+  const mme::OutputErrorResult heard = mme::estimateOutputError(n.search, data, space, start, o);
+  ASSERT_TRUE(plain.ran && heard.ran);
+  EXPECT_EQ(heard.values, plain.values);
+  ASSERT_FALSE(iterations.empty());
+  EXPECT_EQ(static_cast<int>(iterations.size()), heard.iterations);
+  EXPECT_EQ(iterations.front(), 1);
+  for (size_t k = 1; k < iterations.size(); ++k)  // 1, 2, ... within a stage; a new stage from 1
+    EXPECT_TRUE(iterations[k] == iterations[k - 1] + 1 || iterations[k] == 1) << k;
+  EXPECT_FALSE(time_went_back);
+  EXPECT_FALSE(wrong_budget);
+}
+
 // A segment's two residual blocks read one shared simulation (and its Jacobian), which Ceres'
 // threads may ask for at once: the answer is the same bit for bit with 1 and 2 threads, and the
 // same as a second run's.

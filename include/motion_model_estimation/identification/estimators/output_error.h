@@ -10,6 +10,7 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -61,6 +62,10 @@ struct OutputErrorOptions {
   bool std_from_given_noise = false;
   /// Raised by another thread: the solve stops after its current iteration (keeping its best).
   const std::atomic<bool>* cancel = nullptr;
+  /// Called after every iteration of a stage's solve: the iteration (from 1), the stage's
+  /// max_iterations and the wall time since the fit began [s] (a tool's progress line with an
+  /// estimate of the time left). Empty: nothing called.
+  std::function<void(int iteration, int max_iterations, double elapsed_s)> progress;
 };
 
 struct OutputErrorResult {
