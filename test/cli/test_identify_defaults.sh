@@ -72,6 +72,11 @@ grep -q "^identify: wrote a passive model (15 particles, 31 bonds) to $tmp/sel.y
 ! grep -q "sensor muscles:" "$tmp/sel.log" || fail "sensor muscles fitted by default"
 ! grep -q "kind: muscle\|name: anchor_" "$tmp/sel.yaml" || fail "a muscle or an anchor in the default model"
 grep -q "model_kind: passive" "$tmp/sel.yaml" || fail "the file does not say which kind it holds"
+# Structure selection says, level by level, how far it is and the time the rest would take.
+grep -E -q "^identify: structure: 1 of [0-9]+ level\(s\) done in [0-9]+ s, about [0-9]+ s more at this pace$" \
+  "$tmp/sel.log" || fail "no pace line after the first structure level: $(grep "level" "$tmp/sel.log")"
+grep -E -q "^identify: structure: ([0-9]+) of \1 level\(s\) done in [0-9]+ s$" "$tmp/sel.log" ||
+  fail "no line after the last structure level: $(grep "level(s) done" "$tmp/sel.log")"
 # Every step's output says what to do next, down to rviz: identify (it used every frame here, so
 # it says how to keep some for evaluate), a fit on fewer frames (evaluate on the frames after
 # them), evaluate and convert.

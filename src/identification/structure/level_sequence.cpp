@@ -4,6 +4,7 @@
 #include "level_sequence.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -24,12 +25,32 @@ class LevelSequence {
         all_candidates_(std::move(all_candidates)), cumulative_levels_(levels_.size()) {}
 
   std::vector<StructureCandidate> run() {
-    for (size_t level_index = 0; level_index < levels_.size(); ++level_index)
+    const auto start = std::chrono::steady_clock::now();
+    for (size_t level_index = 0; level_index < levels_.size(); ++level_index) {
       if (!runLevel(level_index)) break;
+      const std::chrono::duration<double> elapsed = std::chrono::steady_clock::now() - start;
+      sayPace(level_index, elapsed.count());
+    }
     return std::move(candidates_);
   }
 
  private:
+  /// After a level: how many of the levels planned so far are done and the time the rest would
+  /// take at the pace so far (later levels have more unknowns: a lower bound more than a
+  /// promise; the time limit, when set, cuts it).
+  void sayPace(size_t level_index, double elapsed_s) const {
+    const size_t done = level_index + 1, left = levels_.size() - done;
+    char line[160];
+    std::snprintf(line, sizeof(line), "structure: %zu of %zu level(s) done in %.0f s%s", done,
+                  levels_.size(), elapsed_s, left == 0 ? "" : ", about ");
+    std::string text = line;
+    if (left > 0) {
+      std::snprintf(line, sizeof(line), "%.0f s more at this pace", elapsed_s / done * left);
+      text += line;
+    }
+    ctx_.say(text);
+  }
+
   /// Fits, refits and judges one level and plans the levels it calls for; false when the time
   /// limit stopped the sequence. Once the time limit is spent, no further level starts; a level
   /// under way is given up unless it is the first (which ends on its elimination so far:
