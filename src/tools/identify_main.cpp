@@ -363,8 +363,11 @@ std::string baseKindWords(const mme::PipelineResult& result) {
 }
 
 std::string modelSize(const mme::Model& model) {
-  return std::to_string(model.particles.size()) + " particles, " + std::to_string(model.bonds.size()) +
-         " bonds";
+  const auto count = [](size_t n, const char* one, const char* many) {
+    return std::to_string(n) + " " + (n == 1 ? one : many);
+  };
+  return count(model.particles.size(), "particle", "particles") + ", " +
+         count(model.bonds.size(), "bond", "bonds");
 }
 
 /// How the run talks while it goes: steps' lines and warnings, the structure's report kept as
