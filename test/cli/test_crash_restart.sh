@@ -94,7 +94,14 @@ for _ in $(seq 240); do
 done
 [ "$converged" = 1 ] || { echo "FAIL: no autosave within 0.5 % of the truth in 120 s"; cat "$tmp/cmp"; exit 1; }
 echo "converged: autosave $(cat "$tmp/cmp"), generation $(sed -n 's/^ *generations: //p' "$autosave")"
-sleep 1.2  # a few more autosaves while the checker reads
+# More autosaves while the checker reads, until it has read at least 10 times (on a loaded
+# machine a read takes longer than an autosave period; at most 60 s).
+for _ in $(seq 300); do
+  read -r ok _ <"$tmp/checker.count" 2>/dev/null || ok=0
+  [ "${ok:-0}" -ge 10 ] && break
+  sleep 0.2
+done
+sleep 0.6  # at least one more autosave written while being read
 kill -9 "$est_pid"
 wait "$est_pid" 2>/dev/null || true
 touch "$tmp/stop_checker"
