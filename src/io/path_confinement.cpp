@@ -7,13 +7,13 @@
 
 namespace mme {
 
-namespace {
-
 std::string realPath(const std::string& path) {
   char buffer[PATH_MAX];
   if (!::realpath(path.c_str(), buffer)) return "";
   return buffer;
 }
+
+namespace {
 
 bool isInside(const std::string& root, const std::string& candidate) {
   return candidate.size() > root.size() && candidate.compare(0, root.size(), root) == 0 &&

@@ -1,8 +1,5 @@
 #include "cli_args.h"
 
-#include <limits.h>
-#include <stdlib.h>
-
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -12,6 +9,7 @@
 #include <sstream>
 
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/io/path_confinement.h"
 
 namespace mme {
 
@@ -145,8 +143,8 @@ std::vector<int> parseCountList(const std::string& text, const std::string& opti
 }
 
 std::string absolutePath(const std::string& path) {
-  char buffer[PATH_MAX];
-  return ::realpath(path.c_str(), buffer) ? std::string(buffer) : path;
+  const std::string real = realPath(path);
+  return real.empty() ? path : real;
 }
 
 std::string rvizCommand(const std::string& model_path, const std::string& trajectory_path) {

@@ -7,6 +7,10 @@
 
 namespace mme {
 
+/// The absolute path of an existing `path`, every link resolved; empty when it does not
+/// resolve.
+std::string realPath(const std::string& path);
+
 /// Resolves `path` (relative = inside `directory`) to an absolute path inside `directory`.
 /// `for_writing`: the file may not exist yet, but its parent directory must, and an existing
 /// file must not be a symlink; otherwise the file must exist and its real path must be inside.
