@@ -50,12 +50,15 @@ struct Settings {
   mme::Preset preset = mme::Preset::kPaper;  // the paper's experiments with its own settings
   uint64_t seed = 1;
   std::string fig5_cases;    // "" = every case of fig5
+  std::string stages_cases;  // "" = every recording of stages
   bool wants(const std::string& name) const {
     return only.empty() || ("," + only + ",").find("," + name + ",") != std::string::npos;
   }
-  bool wantsFig5Case(const std::string& name) const {
-    return fig5_cases.empty() ||
-           ("," + fig5_cases + ",").find("," + name + ",") != std::string::npos;
+  bool wantsFig5Case(const std::string& name) const { return listed(fig5_cases, name); }
+  bool wantsStagesCase(const std::string& name) const { return listed(stages_cases, name); }
+  /// `name` is in the comma-separated `list`, or the list is empty (everything).
+  static bool listed(const std::string& list, const std::string& name) {
+    return list.empty() || ("," + list + ",").find("," + name + ",") != std::string::npos;
   }
 };
 

@@ -68,13 +68,16 @@ int main(int argc, char** argv) {
       }
       else if (a == "--seed" && i + 1 < argc) s.seed = std::strtoull(argv[++i], nullptr, 10);
       else if (a == "--fig5-cases" && i + 1 < argc) s.fig5_cases = argv[++i];
+      else if (a == "--stages-cases" && i + 1 < argc) s.stages_cases = argv[++i];
       else {
         std::fprintf(stderr, "usage: bench_paper [--quick] [--out-dir DIR] [--threads T] "
                              "[--only fig1,table1,table2,scaling,random18,defaults,accuracy,\n"
-                             "        online,structure,structure_real,fig5,walker_oe,walker_identify]\n"
+                             "        online,structure,structure_real,fig5,stages,walker_oe,\n"
+                             "        walker_identify]\n"
                              "       [--generations N] [--refine-start G] [--refine-period G]\n"
                              "       [--refine-evaluations E] [--refine ALGORITHM] [--seed S]\n"
                              "       [--fig5-cases walker,Sample01_Eb015pi.c3d,...] (default: all)\n"
+                             "       [--stages-cases Sample01_Eb015pi.c3d,...] (default: all)\n"
                              "       [--preset paper|default] (default: paper)\n"
                              "       bench_paper compare TRUTH.yaml ESTIMATE.yaml\n");
         return 2;
@@ -95,6 +98,7 @@ int main(int argc, char** argv) {
     if (s.wants("structure")) structureExperiment(s);
     if (s.wants("structure") || s.wants("structure_real")) structureRealExperiment(s);
     if (s.wants("fig5")) figure5(s);
+    if (!s.only.empty() && s.wants("stages")) stagesExperiment(s);  // opt-in only
     if (!s.only.empty() && s.wants("walker_oe")) walkerOutputError(s);  // opt-in only
     if (!s.only.empty() && s.wants("walker_identify")) walkerIdentify(s);  // opt-in only
     if (s.wants("table1")) table1(s);
