@@ -50,7 +50,6 @@ mme::PipelineOptions pipelineOptions(const Settings& s) {
   p.identify.es.seed = s.seed;
   p.select_structure = true;
   p.sensor_muscles = mme::SensorMuscleOptions{};
-  p.sensor_muscles->threads = s.threads;
   return p;
 }
 
