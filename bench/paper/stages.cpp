@@ -21,11 +21,13 @@
 namespace paper {
 namespace {
 
-/// A step's model and when the run had it [s from the pipeline's start].
+/// A step's model, when the run had it [s from the pipeline's start], and what it fits: its free
+/// parameters, with the sensor muscles' linear unknowns where kept.
 struct StageModel {
   std::string stage;
   double elapsed_s = 0.0;
   Model model;
+  size_t parameters = 0;
 };
 
 /// The window identify's quick start fits (the first 240 frames, at most 80 % of a short
@@ -63,7 +65,7 @@ std::vector<StageModel> runStages(const Settings& s, const mme::Trajectory& fitt
   std::vector<StageModel> stages;
   mme::PipelineOptions p = pipelineOptions(s);
   p.structure_chosen = [&](const mme::StructureResult& r) {
-    stages.push_back({"structure", elapsed(), r.model});
+    stages.push_back({"structure", elapsed(), r.model, mme::freeParameters(r.model).size()});
   };
   Model searched;
   p.identification_starts = [&searched](const Model& m, const mme::Trajectory&) { searched = m; };
@@ -77,14 +79,15 @@ std::vector<StageModel> runStages(const Settings& s, const mme::Trajectory& fitt
   p.passive_identified = [&](const mme::PipelineResult& r) {
     if (!best.empty() && best.size() == mme::freeParameters(searched).size()) {
       mme::setValues(searched, mme::freeParameters(searched), best);
-      stages.push_back({"search", best_at_s, searched});
+      stages.push_back({"search", best_at_s, searched, best.size()});
     }
     stages.push_back({std::string("passive_") + mme::estimatorName(r.identified.estimator), elapsed(),
-                      r.model});
+                      r.model, r.identified.values.size()});
   };
   const mme::PipelineResult r = mme::runPipeline(mme::startingModel(fitted), fitted, p);
   const bool kept = r.sensor_muscles && r.sensor_muscles->better_than_passive;
-  stages.push_back({kept ? "sensor_muscles" : "sensor_muscles_not_kept", elapsed(), r.model});
+  stages.push_back({kept ? "sensor_muscles" : "sensor_muscles_not_kept", elapsed(), r.model,
+                    r.identified.values.size() + (kept ? r.sensor_muscles->unknowns : 0)});
   return stages;
 }
 
@@ -124,7 +127,7 @@ void stagesExperiment(const Settings& s) {
       const double model_mm = rmsMm(report, mme::Predictor::kModel);
       std::fprintf(f, "%s,%d,%d,%d,%s,%.3f,%zu,%.4g,%.4g,%.4g,%d\n", file, data.numMarkers(),
                    w.judged_start, w.whole.numFrames() - w.judged_start, st.stage.c_str(),
-                   st.elapsed_s, mme::freeParameters(st.model).size(), model_mm,
+                   st.elapsed_s, st.parameters, model_mm,
                    rmsMm(report, mme::Predictor::kConstantVelocity),
                    rmsMm(report, mme::Predictor::kConstantAcceleration), report.rollout_bounded ? 1 : 0);
       std::fflush(f);
