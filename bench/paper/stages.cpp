@@ -102,7 +102,7 @@ double rmsMm(const mme::PredictionReport& report, mme::Predictor predictor) {
 
 void stagesExperiment(const Settings& s) {
   std::FILE* f = openCsv(s.out_dir + "/stages.csv",
-                         "file,markers,fitted_frames,judged_frames,stage,elapsed_s,free_parameters,"
+                         "file,markers,fitted_frames,judged_frames,stage,elapsed_s,parameters,"
                          "predict10_mm,constant_velocity_mm,constant_acceleration_mm,rollout_bounded");
   for (const char* file : {"arm26_elbow_flex.trc", "Sample01_Eb015pi.c3d", "Sample02_dec_real.c3d",
                            "Sample02_pc_int.c3d", "Sample26_Walking_Hybrid_1_1.c3d",
