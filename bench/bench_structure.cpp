@@ -2,10 +2,12 @@
 // markers as particles, identify's default search settings for the levels' refits), on one
 // capture: its wall and CPU time, the chosen level, and the report CSV for a diff between builds.
 //
-//   bench_structure TRAJECTORY [--frames N] [--report OUT.csv]
+//   bench_structure TRAJECTORY [--frames N] [--report OUT.csv] [--progress 1]
 //
+// --progress 1 prints the selection's own lines on stderr, each with the seconds since its start.
 // Prints one line: file, markers, frames, wall_s, cpu_s, chosen level, bonds, types, parameters.
 // Time is measured here and only compared as ratios of runs on the same machine at the same time.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -38,16 +40,18 @@ mme::StructureOptions identifyDefaults() {
 
 int run(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: bench_structure TRAJECTORY [--frames N] [--report OUT.csv]\n");
+    std::fprintf(stderr, "usage: bench_structure TRAJECTORY [--frames N] [--report OUT.csv] [--progress 1]\n");
     return 2;
   }
   const std::string path = argv[1];
   int frames = 240;
   std::string report;
+  bool progress = false;
   for (int k = 2; k + 1 < argc; k += 2) {
     const std::string key = argv[k];
     if (key == "--frames") frames = std::atoi(argv[k + 1]);
     else if (key == "--report") report = argv[k + 1];
+    else if (key == "--progress") progress = std::string(argv[k + 1]) != "0";
     else throw mme::InputError("unknown option '" + key + "'");
   }
   if (frames < 1) throw mme::InputError("--frames must be at least 1");
@@ -56,7 +60,13 @@ int run(int argc, char** argv) {
   const mme::Trajectory used = mme::sliceFrames(data, 0, std::min(frames, data.numFrames()));
   const std::clock_t cpu_start = std::clock();
   const auto wall_start = std::chrono::steady_clock::now();
-  const mme::StructureResult r = mme::selectStructure(model, used, identifyDefaults());
+  mme::StructureOptions so = identifyDefaults();
+  if (progress)
+    so.progress = [wall_start](const std::string& line) {
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+      std::fprintf(stderr, "[%7.2f s] %s\n", s, line.c_str());
+    };
+  const mme::StructureResult r = mme::selectStructure(model, used, so);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   const double cpu_s = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   const mme::StructureCandidate* chosen = nullptr;

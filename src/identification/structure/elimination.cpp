@@ -325,7 +325,9 @@ Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
     removed += static_cast<int>(batch.size());
   }
   if (cut && !finish_when_cut) return cutSelection();  // the caller gives the level up
-  solve.resolve(groups);  // the final solve from scratch
+  // The final solve from scratch (none needed when nothing was downdated since the last one:
+  // it would give the same numbers).
+  if (solve.downdatesSinceSolve() > 0) solve.resolve(groups);
   const size_t unknowns = solve.unknowns();
   Selection s = solve.selection(std::move(groups), cut);
   if (progress) progress("  elimination: " + std::to_string(removed) + " unit(s) removed, " +
