@@ -5,9 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/identification/search/parameter_space.h"
+#include "motion_model_estimation/identification/structure/marker_model.h"
 
 namespace paper {
 
@@ -106,6 +108,21 @@ mme::StructureOptions structureOptions(const Settings& s) {
   so.identify.es.threads = s.threads;
   so.identify.estimate_std = false;
   return so;
+}
+
+mme::StructureResult selectStructureOnFitted(const mme::HeldOutSplit& split, const mme::StructureOptions& so) {
+  checkUnseen(split.fit, split, "structure selection");
+  return mme::selectStructure(mme::markerModel(split.fit), split.fit, so);
+}
+
+void checkUnseen(const mme::Trajectory& seen, const mme::HeldOutSplit& split, const std::string& who) {
+  const bool reports = split.held_start < split.held.numFrames();
+  if (seen.numFrames() == 0 || !reports) return;
+  const double last_seen_s = seen.times_s.back(), first_reported_s = split.held.times_s[split.held_start];
+  if (!(last_seen_s < first_reported_s))
+    throw std::logic_error(who + " saw frames up to t = " + std::to_string(last_seen_s) +
+                           " s, which reach the reported held-out frames (from t = " +
+                           std::to_string(first_reported_s) + " s)");
 }
 
 }  // namespace paper

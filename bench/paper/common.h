@@ -75,4 +75,15 @@ mme::IdentifyOptions esOptions(const Settings& s, int generations);
 /// Structure selection as the benchmarks run it: the default engine, no std.
 mme::StructureOptions structureOptions(const Settings& s);
 
+/// Structure selection on the fitted part of `split` only (`split.fit`, particles from the
+/// markers), so that the held-out frames a benchmark then reports were seen by no choice: the
+/// selection ranks its levels on the end of the fitted part, never on `split.held`'s frames
+/// from `split.held_start`. Throws std::logic_error (checkUnseen) when the frames it saw reach
+/// the reported ones.
+mme::StructureResult selectStructureOnFitted(const mme::HeldOutSplit& split, const mme::StructureOptions& so);
+
+/// Throws std::logic_error naming `who` unless every frame of `seen` comes before the first
+/// frame `split` reports (`split.held` from `split.held_start`), by their times.
+void checkUnseen(const mme::Trajectory& seen, const mme::HeldOutSplit& split, const std::string& who);
+
 }  // namespace paper

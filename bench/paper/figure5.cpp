@@ -63,6 +63,12 @@ struct DampersFit {
   int generations = 0;
 };
 
+/// The split every variant of a case is fitted and judged on (structure selection's default
+/// share: the last 20 % held out).
+mme::HeldOutSplit fig5Split(const mme::Trajectory& data, const std::string& name) {
+  return mme::splitHeldOut(data, mme::StructureOptions().held_out_share, "fig5 " + name);
+}
+
 /// The cases --fig5-cases selects: the walking walker, then the real recordings with the
 /// structure chosen from their markers.
 std::vector<Fig5Case> fig5Cases(const Settings& s) {
@@ -83,7 +89,9 @@ std::vector<Fig5Case> fig5Cases(const Settings& s) {
     if (!s.wantsFig5Case(file)) continue;
     mme::Trajectory data = mme::readTrajectoryFile(std::string(MME_TEST_DATA_DIR) + "/real/" + file);
     data = mme::sliceFrames(data, 0, std::min(data.numFrames(), 300));
-    const mme::StructureResult r = mme::selectStructure(mme::markerModel(data), data, so);
+    // Chosen on the fitted frames only: the held-out frames every variant is judged on ranked
+    // no level.
+    const mme::StructureResult r = selectStructureOnFitted(fig5Split(data, file), so);
     cases.push_back({file, r.model, data});
   }
   return cases;
@@ -250,9 +258,7 @@ void figure5(const Settings& s) {
               "gravity_only_rms_10_m,bounded,wall_s")};
   const int generations = s.generations > 0 ? s.generations : (s.quick ? 10 : 100);
   for (const Fig5Case& c : fig5Cases(s)) {
-    // The split structure selection judges on (its default share: the last 20 %).
-    const mme::HeldOutSplit split =
-        mme::splitHeldOut(c.data, mme::StructureOptions().held_out_share, "fig5 " + c.name);
+    const mme::HeldOutSplit split = fig5Split(c.data, c.name);
     const mme::IdentifyOptions o = fig5Options(s, generations);
     DampersFit dampers;
     for (const char* variant : {"springs", "dampers", "muscles", "sensor_muscles"})

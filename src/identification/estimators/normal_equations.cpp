@@ -22,6 +22,54 @@ constexpr int kRefinementSteps = 2;
 constexpr double kAbsentColumn = 1e-30;
 /// A trusted residual is at most the right-hand side's, within the round-off of forming it.
 constexpr double kResidualSlack = 1e-6;
+/// Blocks at most this size are inverted directly by the recursions below.
+constexpr Eigen::Index kDirectBlock = 48;
+
+/// Replaces the lower-triangular `l` by its inverse (the strict upper part set to 0), by halves:
+/// inv([L11 0; L21 L22]) = [L11^-1 0; -L22^-1 L21 L11^-1 L22^-1]. A sixth of n^3 multiply-adds,
+/// where solving L X = I column by column costs half of n^3.
+void invertLowerInPlace(Eigen::Ref<Eigen::MatrixXd> l) {
+  const Eigen::Index n = l.rows();
+  if (n <= kDirectBlock) {
+    Eigen::MatrixXd inv = Eigen::MatrixXd::Identity(n, n);
+    l.triangularView<Eigen::Lower>().solveInPlace(inv);
+    l = inv.triangularView<Eigen::Lower>();
+    return;
+  }
+  const Eigen::Index n1 = n / 2, n2 = n - n1;
+  invertLowerInPlace(l.topLeftCorner(n1, n1));
+  invertLowerInPlace(l.bottomRightCorner(n2, n2));
+  l.topRightCorner(n1, n2).setZero();
+  const Eigen::MatrixXd t = l.bottomRightCorner(n2, n2).triangularView<Eigen::Lower>() * l.bottomLeftCorner(n2, n1);
+  l.bottomLeftCorner(n2, n1).noalias() = -(t * l.topLeftCorner(n1, n1).triangularView<Eigen::Lower>());
+}
+
+/// The lower triangle of U^T U for a lower-triangular `u`, in place of `u` (by halves:
+/// [U11^T U11 + U21^T U21, .; U22^T U21, U22^T U22]), a sixth of n^3 multiply-adds.
+void lowerGramInPlace(Eigen::Ref<Eigen::MatrixXd> u) {
+  const Eigen::Index n = u.rows();
+  if (n <= kDirectBlock) {
+    const Eigen::MatrixXd lower = u.triangularView<Eigen::Lower>();
+    u.noalias() = lower.transpose() * lower;
+    return;
+  }
+  const Eigen::Index n1 = n / 2, n2 = n - n1;
+  lowerGramInPlace(u.topLeftCorner(n1, n1));
+  u.topLeftCorner(n1, n1).selfadjointView<Eigen::Lower>().rankUpdate(u.bottomLeftCorner(n2, n1).transpose());
+  u.bottomLeftCorner(n2, n1) =
+      u.bottomRightCorner(n2, n2).triangularView<Eigen::Lower>().transpose() * u.bottomLeftCorner(n2, n1);
+  lowerGramInPlace(u.bottomRightCorner(n2, n2));
+}
+
+/// The inverse of the matrix `llt` factorised, (L L^T)^-1 = L^-T L^-1: a third of the work of
+/// solving for the identity, which dominated structure selection's solves of a thousand
+/// columns.
+Eigen::MatrixXd inverseFromCholesky(const Eigen::LLT<Eigen::MatrixXd>& llt) {
+  Eigen::MatrixXd inv = llt.matrixL();
+  invertLowerInPlace(inv);
+  lowerGramInPlace(inv);
+  return inv.selfadjointView<Eigen::Lower>();
+}
 
 }  // namespace
 
@@ -64,7 +112,7 @@ NormalEquationsSolution solveNormalEquations(const Eigen::MatrixXd& ata, const E
     out.rss = std::max(0.0, rss);
     out.trusted = true;
     for (int i = 0; i < m; ++i) out.theta[columns[i]] = out.scale[i] * theta_s[i];
-    if (want_inverse) out.inverse_scaled = llt.solve(Eigen::MatrixXd::Identity(m, m));
+    if (want_inverse) out.inverse_scaled = inverseFromCholesky(llt);
     return out;
   }
   return out;

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <stdexcept>
 #include <utility>
 
 #include "motion_model_estimation/core/error.h"
@@ -20,25 +21,35 @@ namespace {
 
 /// The active columns' solve during the elimination: the scaled inverse of their normal
 /// equations and the scaled solution (theta = scale .* theta_s), solved from scratch or
-/// downdated when columns go.
+/// downdated when columns go. The inverse keeps the size of its last solve from scratch: a
+/// removed column's row and column are zeroed in place (the downdate leaves them zero up to
+/// round-off) instead of the kept block being copied out on every removal, which on a level of a
+/// thousand unknowns cost more than the downdate itself.
 class ActiveSolve {
  public:
   ActiveSolve(const EquationErrorSystem& sys, const std::vector<int>& always, const std::string& who)
-      : sys_(sys), always_(always), who_(who) {}
+      : sys_(sys), always_(always), who_(who), position_(sys.atb.size(), -1) {}
 
   /// Solves the active groups' columns from scratch.
   void resolve(const std::vector<Group>& groups) {
-    cols_ = activeColumns(groups, always_);
-    NormalEquationsSolution solved = solveActive(sys_, cols_, true, who_);
+    const std::vector<int> cols = activeColumns(groups, always_);
+    adopt(cols, solveActive(sys_, cols, true, who_));
+  }
+
+  /// Takes `solved` (solveActive's of the columns `cols`, with its inverse) as the solve from
+  /// scratch.
+  void adopt(const std::vector<int>& cols, NormalEquationsSolution solved) {
+    cols_ = cols;
     const Eigen::VectorXd& full = solved.theta;
     inv_ = std::move(solved.inverse_scaled);
     scale_ = std::move(solved.scale);
     theta_s_.resize(cols_.size());
-    position_.clear();
+    std::fill(position_.begin(), position_.end(), -1);
     for (size_t i = 0; i < cols_.size(); ++i) {
       position_[cols_[i]] = static_cast<int>(i);
       theta_s_[i] = scale_[i] > 0.0 ? full[cols_[i]] / scale_[i] : 0.0;
     }
+    live_ = cols_.size();
     since_solve_ = 0;
   }
 
@@ -48,10 +59,10 @@ class ActiveSolve {
   /// The positions of a unit's columns (a spring with its active damper).
   std::vector<int> unitOf(const std::vector<Group>& groups, int g) const {
     std::vector<int> unit;
-    for (int c : groups[g].columns) unit.push_back(position_.at(c));
+    for (int c : groups[g].columns) unit.push_back(positionOf(c));
     for (int child : groups[g].children)
       if (groups[child].active)
-        for (int c : groups[child].columns) unit.push_back(position_.at(c));
+        for (int c : groups[child].columns) unit.push_back(positionOf(c));
     return unit;
   }
 
@@ -87,38 +98,37 @@ class ActiveSolve {
     return t.dot(block.completeOrthogonalDecomposition().solve(t));
   }
 
-  /// Removes the columns at positions `r` from the solve (downdate).
-  void drop(std::vector<int> r) {
-    std::sort(r.begin(), r.end());
-    const std::vector<int> k = keptPositions(r);
-    const int u = static_cast<int>(r.size()), n = static_cast<int>(k.size());
-    Eigen::MatrixXd rr(u, u), kr(n, u), kk(n, n);
-    Eigen::VectorXd tr(u), tk(n), sk(n);
-    for (int i = 0; i < u; ++i) {
-      tr[i] = theta_s_[r[i]];
-      for (int j = 0; j < u; ++j) rr(i, j) = inv_(r[i], r[j]);
+  /// Removes the columns at positions `r` from the solve (downdate): theta_K -= inv_KR
+  /// inv_RR^-1 theta_R, inv_KK -= inv_KR inv_RR^-1 inv_RK, in place; R's rows and columns are
+  /// then zeroed and no longer live.
+  void drop(const std::vector<int>& r) {
+    const int u = static_cast<int>(r.size()), m = static_cast<int>(inv_.rows());
+    if (u == 0) return;
+    Eigen::MatrixXd rr(u, u), kr(m, u);
+    Eigen::VectorXd tr(u);
+    for (int j = 0; j < u; ++j) {
+      tr[j] = theta_s_[r[j]];
+      kr.col(j) = inv_.col(r[j]);
+      for (int i = 0; i < u; ++i) rr(i, j) = inv_(r[i], r[j]);
     }
-    for (int i = 0; i < n; ++i) {
-      tk[i] = theta_s_[k[i]];
-      sk[i] = scale_[k[i]];
-      for (int j = 0; j < u; ++j) kr(i, j) = inv_(k[i], r[j]);
-      for (int j = 0; j < n; ++j) kk(i, j) = inv_(k[i], k[j]);
-    }
-    if (n > 0) {  // (every column going leaves nothing to downdate: Eigen has no empty solve)
+    if (static_cast<size_t>(u) < live_) {  // (every column going leaves nothing to downdate)
       const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> rr_cod(rr);
       const Eigen::MatrixXd w = rr_cod.solve(kr.transpose());  // inv_RR^-1 inv_RK
-      theta_s_ = tk - kr * rr_cod.solve(tr);
-      inv_ = kk - kr * w;
-    } else {
-      theta_s_.resize(0);
-      inv_.resize(0, 0);
+      theta_s_.noalias() -= kr * rr_cod.solve(tr);
+      inv_.noalias() -= kr * w;
     }
-    scale_ = sk;
-    keepColumns(k);
+    for (int p : r) {
+      inv_.row(p).setZero();
+      inv_.col(p).setZero();
+      theta_s_[p] = 0.0;
+      position_[cols_[p]] = -1;
+    }
+    live_ -= static_cast<size_t>(u);
     ++since_solve_;
   }
 
-  /// The selection this solve describes (`groups` as they stand), `cut` as given.
+  /// The selection this solve describes (`groups` as they stand), `cut` as given. Called right
+  /// after a solve from scratch (every position live).
   Selection selection(std::vector<Group> groups, bool cut) const {
     Selection s;
     s.groups = std::move(groups);
@@ -133,38 +143,23 @@ class ActiveSolve {
     return s;
   }
 
-  size_t unknowns() const { return cols_.size(); }
+  size_t unknowns() const { return live_; }
 
  private:
-  /// The positions not in `r` (sorted).
-  std::vector<int> keptPositions(const std::vector<int>& r) const {
-    const int m = static_cast<int>(cols_.size()), u = static_cast<int>(r.size());
-    std::vector<int> k;
-    for (int i = 0, j = 0; i < m; ++i) {
-      if (j < u && r[j] == i) { ++j; continue; }
-      k.push_back(i);
-    }
-    return k;
-  }
-
-  /// Keeps the columns at positions `k` (in order) and renumbers their positions.
-  void keepColumns(const std::vector<int>& k) {
-    std::vector<int> kept_cols;
-    position_.clear();
-    for (size_t i = 0; i < k.size(); ++i) {
-      kept_cols.push_back(cols_[k[i]]);
-      position_[cols_[k[i]]] = static_cast<int>(i);
-    }
-    cols_ = kept_cols;
+  int positionOf(int column) const {
+    const int p = position_[column];
+    if (p < 0) throw std::logic_error("structure selection: a removed column was asked for");
+    return p;
   }
 
   const EquationErrorSystem& sys_;
   const std::vector<int>& always_;
   const std::string& who_;
-  std::vector<int> cols_;
-  Eigen::MatrixXd inv_;
+  std::vector<int> cols_;        ///< the columns of the last solve from scratch
+  Eigen::MatrixXd inv_;          ///< over cols_; removed columns' rows and columns zero
   Eigen::VectorXd scale_, theta_s_;
-  std::map<int, int> position_;
+  std::vector<int> position_;    ///< per column of the system: its position in cols_, -1 if not live
+  size_t live_ = 0;
   int since_solve_ = 0;
 };
 
@@ -302,11 +297,13 @@ double bic(double rss_m2, size_t rows, int parameters, double sigma2_floor) {
 Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
                     const std::vector<int>& always, double sigma2, const std::string& who,
                     const Deadline& deadline, bool finish_when_cut,
-                    const std::function<void(const std::string&)>& progress) {
+                    const std::function<void(const std::string&)>& progress,
+                    NormalEquationsSolution* first_solve) {
   const double price_per_param = sigma2 * std::log(static_cast<double>(std::max<size_t>(sys.rows, 2)));
   if (deadline.passed() && !finish_when_cut) return cutSelection();  // before the first solve
   ActiveSolve solve(sys, always, who);
-  solve.resolve(groups);
+  if (first_solve) solve.adopt(activeColumns(groups, always), std::move(*first_solve));
+  else solve.resolve(groups);
   int removed = 0;
   bool cut = false;
   for (;;) {
@@ -328,7 +325,9 @@ Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
     removed += static_cast<int>(batch.size());
   }
   if (cut && !finish_when_cut) return cutSelection();  // the caller gives the level up
-  solve.resolve(groups);  // the final solve from scratch
+  // The final solve from scratch (none needed when nothing was downdated since the last one:
+  // it would give the same numbers).
+  if (solve.downdatesSinceSolve() > 0) solve.resolve(groups);
   const size_t unknowns = solve.unknowns();
   Selection s = solve.selection(std::move(groups), cut);
   if (progress) progress("  elimination: " + std::to_string(removed) + " unit(s) removed, " +

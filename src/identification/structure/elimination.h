@@ -65,14 +65,17 @@ double bic(double rss_m2, size_t rows, int parameters, double sigma2_floor);
 
 /// Grouped backward elimination with the BIC's price per parameter, sigma2 * ln(N). The solve
 /// is kept as the (scaled) inverse of the active normal equations and downdated when a unit
-/// goes (theta_K -= inv_KR inv_RR^-1 theta_R, inv_KK -= inv_KR inv_RR^-1 inv_RK); it is
-/// recomputed from scratch every 25 removals against drift. The time limit stops the removals;
+/// goes (theta_K -= inv_KR inv_RR^-1 theta_R, inv_KK -= inv_KR inv_RR^-1 inv_RK, in place:
+/// O(n^2) per removal, no copy); it is recomputed from scratch every 25 removals against drift
+/// and once at the end (unless nothing was downdated since). The time limit stops the removals;
 /// the selection so far is then solved again unless `finish_when_cut` is false (the caller gives
-/// the level up and reads only `cut`).
+/// the level up and reads only `cut`). `first_solve`, when given, is solveActive's solve of the
+/// active groups' columns with its inverse (the caller's, taken over: not solved twice).
 Selection eliminate(const EquationErrorSystem& sys, std::vector<Group> groups,
                     const std::vector<int>& always, double sigma2, const std::string& who,
                     const Deadline& deadline, bool finish_when_cut,
-                    const std::function<void(const std::string&)>& progress);
+                    const std::function<void(const std::string&)>& progress,
+                    NormalEquationsSolution* first_solve = nullptr);
 
 }  // namespace structure
 }  // namespace mme

@@ -112,12 +112,13 @@ class LevelFitter {
     std::vector<int> always;
     const std::vector<Group> groups = groupColumns(sys, freeParameters(full_), ctx_.first_candidate_type, &always);
     const std::vector<int> all = activeColumns(groups, always);
-    const NormalEquationsSolution solved_all = solveActive(sys, all, false, level_.name);
+    // With its inverse: the elimination starts from this solve.
+    NormalEquationsSolution solved_all = solveActive(sys, all, true, level_.name);
     if (giveUp()) return PassEnd::kGivenUp;
     const NoiseLevel noise = noiseLevel(sys, solved_all.theta, all.size());
     sayEliminating(sys, all.size(), solved_all.theta, noise);
     Selection sel = eliminate(sys, groups, always, noise.sigma2_m2, level_.name, ctx_.deadline,
-                              first_level_, ctx_.options.progress);
+                              first_level_, ctx_.options.progress, &solved_all);
     if (giveUp()) return PassEnd::kGivenUp;
     Solved solved = describe(full_, sys, sel, noise.sigma2_m2, ctx_.first_candidate_type, level_.dampers);
     const bool out_of_time = ctx_.deadline.passed();  // the first level ends on what it has

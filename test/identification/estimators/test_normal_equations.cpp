@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include "motion_model_estimation/identification/estimators/normal_equations.h"
 
@@ -99,6 +100,29 @@ TEST(NormalEquations, ColumnsAbsentOrNotAskedForStayZero) {
     for (int b = 0; b < 3; ++b) scaled(a, b) = got.scale[a] * ata(cols[a], cols[b]) * got.scale[b];
   scaled.diagonal().array() += got.ridge;
   EXPECT_TRUE((scaled * got.inverse_scaled).isIdentity(1e-6));
+}
+
+// Large enough that the inverse is built by its blocked recursions (several levels of halves,
+// odd sizes): it must still be the symmetric inverse of the scaled, regularised system.
+TEST(NormalEquations, TheInverseOfALargeSystemIsSymmetricAndExact) {
+  for (int cols : {49, 97, 203}) {
+    std::mt19937 rng(static_cast<uint32_t>(cols));
+    std::normal_distribution<double> unit(0.0, 1.0);
+    System s{Eigen::MatrixXd(3 * cols, cols), Eigen::VectorXd(3 * cols)};
+    for (int i = 0; i < s.j.rows(); ++i) {
+      s.y[i] = unit(rng);
+      for (int c = 0; c < cols; ++c) s.j(i, c) = unit(rng) * (1.0 + c);  // columns of unequal scale
+    }
+    std::vector<int> all(cols);
+    for (int c = 0; c < cols; ++c) all[c] = c;
+    const mme::NormalEquationsSolution got = mme::solveNormalEquations(s.ata(), s.atb(), s.btb(), all, true);
+    ASSERT_TRUE(got.trusted);
+    ASSERT_EQ(got.inverse_scaled.rows(), cols);
+    EXPECT_TRUE(got.inverse_scaled.isApprox(got.inverse_scaled.transpose(), 1e-14)) << cols;
+    const Eigen::MatrixXd scaled = got.scale.asDiagonal() * s.ata() * got.scale.asDiagonal() +
+                                   got.ridge * Eigen::MatrixXd::Identity(cols, cols);
+    EXPECT_TRUE((scaled * got.inverse_scaled).isIdentity(1e-9)) << cols;
+  }
 }
 
 TEST(NormalEquations, NoColumnsGiveZeroAndTheWholeRightHandSide) {
