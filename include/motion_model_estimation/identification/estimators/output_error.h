@@ -25,6 +25,16 @@ namespace mme {
 /// contributes only h^4 x''''. Robust (median of the squares). 0 when too few samples.
 double estimateMarkerNoise(const Trajectory& trajectory);
 
+/// How the output error forms its segments' Jacobians.
+enum class OutputErrorJacobian {
+  /// Forward sensitivities through the motion law (motion_sensitivity.h): exact, one
+  /// simulation per segment. A model they do not cover (sensitivityUnsupportedReason) falls
+  /// back to finite differences (OutputErrorResult::jacobian says why).
+  kExact,
+  /// Forward differences: one simulation per column; kept to compare against (bench).
+  kFiniteDifferences,
+};
+
 struct OutputErrorOptions {
   int segment_frames = 10;          ///< K: frames per shooting segment
   /// Weight of a continuity residual relative to an observation's: large = nearly hard (the
@@ -57,6 +67,7 @@ struct OutputErrorOptions {
   int grow_segments = 0;
   double max_time_s = 0.0;          ///< 0 = no limit
   int threads = 1;                  ///< Ceres' threads evaluating segments
+  OutputErrorJacobian jacobian = OutputErrorJacobian::kExact;
   bool estimate_std = true;         ///< 1-sigma std per parameter from the Jacobian at the optimum
   /// The std from noise_std_m as given (the Cramer-Rao bound) rather than from the residuals.
   bool std_from_given_noise = false;
@@ -92,6 +103,8 @@ struct OutputErrorResult {
   /// the answer is where the solver was, not an optimum.
   bool stopped_by_time = false;
   std::string termination;          ///< Ceres' message
+  /// "exact", or "finite differences" and, when exact ones were asked for, why not.
+  std::string jacobian;
   double wall_time_s = 0.0;
 };
 
