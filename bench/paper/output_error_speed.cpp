@@ -89,13 +89,34 @@ void outputErrorSpeed(const Settings& s) {
                    r.wall_time_s / std::max(1, r.iterations), r.converged ? 1 : 0, median,
                    bound_median, median / bound_median);
       std::fflush(f);
-      std::printf("oe_speed: random43 %-18s %8.2f s, %3d iterations (%.3f s each), %s, median error "
-                  "%.4g %% = %.2f x the bound; jacobian: %s\n", jacobianName(j), r.wall_time_s,
+      std::printf("oe_speed: random43 %-18s %8.2f s (Jacobians %.2f s, linear solver %.2f s), %3d "
+                  "iterations (%.3f s each), %s, median error %.4g %% = %.2f x the bound; jacobian: %s\n",
+                  jacobianName(j), r.wall_time_s, r.jacobian_time_s, r.linear_solver_time_s,
                   r.iterations, r.wall_time_s / std::max(1, r.iterations),
                   r.converged ? "converged" : r.termination.c_str(), median, median / bound_median,
                   r.jacobian.c_str());
       if (j == mme::OutputErrorJacobian::kExact && fd_s > 0.0)
         std::printf("oe_speed: random43: finite differences / exact wall time = %.2f\n", fd_s / r.wall_time_s);
+    }
+    // The linear solvers on the same problem, exact Jacobians, a fixed number of iterations.
+    const std::vector<std::pair<const char*, mme::OutputErrorLinearSolver>> solvers = {
+        {"sparse_normal_cholesky", mme::OutputErrorLinearSolver::kSparseNormalCholesky},
+        {"sparse_schur", mme::OutputErrorLinearSolver::kSparseSchur},
+        {"iterative_schur", mme::OutputErrorLinearSolver::kIterativeSchur}};
+    for (const auto& solver : solvers) {
+      mme::OutputErrorOptions o;
+      o.threads = s.threads;
+      o.linear_solver = solver.second;
+      o.max_iterations = s.quick ? 3 : 8;
+      o.estimate_std = false;
+      const mme::OutputErrorResult r = mme::estimateOutputError(search, data, space, start, o);
+      std::fprintf(f, "random43_%s,exact,%zu,%d,%.3f,%d,%.4f,%d,,,\n", solver.first, true_values.size(),
+                   frames, r.wall_time_s, r.iterations, r.wall_time_s / std::max(1, r.iterations),
+                   r.converged ? 1 : 0);
+      std::fflush(f);
+      std::printf("oe_speed: random43 solver %-22s %7.2f s (Jacobians %.2f s, linear solver %.2f s), "
+                  "%d iterations, cost %.6g m^2\n", solver.first, r.wall_time_s, r.jacobian_time_s,
+                  r.linear_solver_time_s, r.iterations, r.observation_cost_m2);
     }
   }
   {
@@ -117,8 +138,9 @@ void outputErrorSpeed(const Settings& s) {
       std::fprintf(f, "walk39,%s,%zu,%d,%.3f,%d,%.4f,%d,,,\n", jacobianName(j), space.size(),
                    data.numFrames(), r.wall_time_s, r.iterations, per_iteration, r.converged ? 1 : 0);
       std::fflush(f);
-      std::printf("oe_speed: walk39 %-18s %8.2f s, %3d iterations (%.3f s each), cost %.4g -> %.4g m^2; "
-                  "jacobian: %s\n", jacobianName(j), r.wall_time_s, r.iterations, per_iteration,
+      std::printf("oe_speed: walk39 %-18s %8.2f s (Jacobians %.2f s, linear solver %.2f s), %3d "
+                  "iterations (%.3f s each), cost %.4g -> %.4g m^2; jacobian: %s\n", jacobianName(j),
+                  r.wall_time_s, r.jacobian_time_s, r.linear_solver_time_s, r.iterations, per_iteration,
                   r.start_cost_m2, r.observation_cost_m2, r.jacobian.c_str());
       if (j == mme::OutputErrorJacobian::kFiniteDifferences) fd_per_iteration = per_iteration;
       else if (per_iteration > 0.0)

@@ -10,6 +10,7 @@
 
 #include <ceres/jet.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "motion_model_estimation/core/bond_kind.h"

@@ -519,7 +519,18 @@ int buildProblem(Problem* p, const ParameterSpace& space, SegmentUnknowns* u, ce
 
 ceres::Solver::Options solverOptions(const OutputErrorOptions& options) {
   ceres::Solver::Options solver;
-  solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  switch (options.linear_solver) {
+    case OutputErrorLinearSolver::kSparseNormalCholesky:
+      solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+      break;
+    case OutputErrorLinearSolver::kSparseSchur:
+      solver.linear_solver_type = ceres::SPARSE_SCHUR;
+      break;
+    case OutputErrorLinearSolver::kIterativeSchur:
+      solver.linear_solver_type = ceres::ITERATIVE_SCHUR;
+      solver.preconditioner_type = ceres::SCHUR_JACOBI;
+      break;
+  }
   solver.max_num_iterations = options.max_iterations;
   solver.num_threads = std::max(1, options.threads);
   solver.function_tolerance = 1e-14;
@@ -533,11 +544,18 @@ ceres::Solver::Options solverOptions(const OutputErrorOptions& options) {
   return solver;
 }
 
+/// Adds a solve's time split to the result's.
+void addTimes(const ceres::Solver::Summary& summary, OutputErrorResult* out) {
+  out->jacobian_time_s += summary.jacobian_evaluation_time_in_seconds;
+  out->linear_solver_time_s += summary.linear_solver_time_in_seconds;
+}
+
 /// The solve, with continuation when asked: soft continuity first, then the given weight (the
 /// cached residuals carry the weight: recomputed at each change). Returns the iterations.
 int solveWithContinuation(Problem* p, const OutputErrorOptions& options, double noise_std_prior_m,
                           const std::function<double()>& elapsed_s, SegmentUnknowns* u,
-                          ceres::Problem* problem, ceres::Solver::Summary* summary) {
+                          ceres::Problem* problem, ceres::Solver::Summary* summary,
+                          OutputErrorResult* out) {
   ceres::Solver::Options solver = solverOptions(options);
   // The start-state fits spent part of the budget.
   if (options.max_time_s > 0.0) solver.max_solver_time_in_seconds = std::max(1e-3, options.max_time_s - elapsed_s());
@@ -551,13 +569,17 @@ int solveWithContinuation(Problem* p, const OutputErrorOptions& options, double 
     p->w_cont = options.first_continuity_weight / noise_std_prior_m;
     for (auto& sim : u->sims) sim->invalidate();
     ceres::Solve(solver, problem, summary);
+    addTimes(*summary, out);
     first_stage_iterations = static_cast<int>(summary->iterations.size()) - 1;
     p->w_cont = hard_w_cont;
     for (auto& sim : u->sims) sim->invalidate();
     if (options.max_time_s > 0.0)
       solver.max_solver_time_in_seconds = std::max(1e-3, options.max_time_s - elapsed_s());
   }
-  if (!(options.cancel && options.cancel->load())) ceres::Solve(solver, problem, summary);
+  if (!(options.cancel && options.cancel->load())) {
+    ceres::Solve(solver, problem, summary);
+    addTimes(*summary, out);
+  }
   return first_stage_iterations + static_cast<int>(summary->iterations.size()) - 1;
 }
 
@@ -651,7 +673,8 @@ OutputErrorResult fitOnce(const Model& model, const Trajectory& trajectory,
   out.segments = u.count();
   out.start_cost_m2 = u.observationCost(*p);
   ceres::Solver::Summary summary;
-  out.iterations = solveWithContinuation(p.get(), options, out.noise_std_prior_m, elapsed_s, &u, &problem, &summary);
+  out.iterations = solveWithContinuation(p.get(), options, out.noise_std_prior_m, elapsed_s, &u, &problem,
+                                         &summary, &out);
   out.ran = true;
   out.converged = summary.termination_type == ceres::CONVERGENCE;
   out.stopped_by_time = !out.converged && options.max_time_s > 0.0 && elapsed_s() >= options.max_time_s;
@@ -694,6 +717,7 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
     stage.noise_std_m = std::max(estimateMarkerNoise(trajectory), 1e-9);
   std::vector<double> genes = start_genes;
   int iterations = 0, stages = 0;
+  double jacobian_time_s = 0.0, linear_solver_time_s = 0.0;
   for (long segments = options.grow_segments;; segments *= 2) {
     const bool last = segments * K + 1 >= trajectory.numFrames();
     stage.estimate_std = last && options.estimate_std;
@@ -707,6 +731,8 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
       return r;
     }
     iterations += r.iterations;
+    jacobian_time_s += r.jacobian_time_s;
+    linear_solver_time_s += r.linear_solver_time_s;
     ++stages;
     genes = r.genes;
     const bool stopped = (options.cancel && options.cancel->load()) ||
@@ -722,6 +748,8 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
       }
       if (!last && !(options.cancel && options.cancel->load())) r.stopped_by_time = true;
       r.iterations = iterations;
+      r.jacobian_time_s = jacobian_time_s;
+      r.linear_solver_time_s = linear_solver_time_s;
       r.stages = stages;
       r.wall_time_s = elapsed_s();
       return r;

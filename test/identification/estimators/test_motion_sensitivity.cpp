@@ -17,7 +17,6 @@
 
 namespace {
 
-using mme::test::addParticle;
 using mme::test::addType;
 
 /// Five moving particles and one fixed: a nonlinear damped spring type, a cable (a conditional
@@ -28,12 +27,12 @@ mme::Model everyKind() {
   m.frame_rate_hz = 100.0;
   m.substeps = 2;
   for (int k = 0; k < 3; ++k) m.gravity_mps2[k] = mme::valueParam(k == 2 ? -9.81 : 0.3, true);
-  addParticle(&m, {0.0, 0.0, 0.5}, 0.5, false, "", {0.1, 0.0, 0.0});
-  addParticle(&m, {0.12, 0.01, 0.5}, 0.7);
-  addParticle(&m, {0.2, 0.1, 0.52}, 0.6, false, "", {0.0, -0.2, 0.1});
-  addParticle(&m, {0.05, 0.13, 0.45}, 0.4);
-  addParticle(&m, {0.3, 0.3, -0.0196}, 1.0, false, "", {0.1, 0.05, 0.01});
-  addParticle(&m, {0.0, 0.1, 0.6}, 1.0, true);
+  mme::test::addParticle(&m, {0.0, 0.0, 0.5}, 0.5, false, "", {0.1, 0.0, 0.0});
+  mme::test::addParticle(&m, {0.12, 0.01, 0.5}, 0.7);
+  mme::test::addParticle(&m, {0.2, 0.1, 0.52}, 0.6, false, "", {0.0, -0.2, 0.1});
+  mme::test::addParticle(&m, {0.05, 0.13, 0.45}, 0.4);
+  mme::test::addParticle(&m, {0.3, 0.3, -0.0196}, 1.0, false, "", {0.1, 0.05, 0.01});
+  mme::test::addParticle(&m, {0.0, 0.1, 0.6}, 1.0, true);
   const int s = addType(&m, "s", mme::BondKind::kSpring,
                         {{mme::kStiffness, 40.0}, {mme::kRestLength, 0.11}, {mme::kDamping, 0.3},
                          {mme::kStiffnessNl, 300.0}, {mme::kDampingNl, 0.5}});
@@ -147,9 +146,9 @@ TEST(MotionSensitivity, NamesWhatItDoesNotCover) {
     if (kind == mme::BondKind::kMuscle) continue;  // muscleObject above
     mme::Model one;
     one.frame_rate_hz = 100.0;
-    addParticle(&one, {0, 0, 0});
-    addParticle(&one, {0.1, 0, 0});
-    addParticle(&one, {0.1, 0.1, 0});
+    mme::test::addParticle(&one, {0, 0, 0});
+    mme::test::addParticle(&one, {0.1, 0, 0});
+    mme::test::addParticle(&one, {0.1, 0.1, 0});
     const int t = addType(&one, "t", kind, {{mme::bondKindInfo(kind).params.front(), 1.0}});
     mme::addBond(&one, t, 0, mme::bondKindInfo(kind).arity > 1 ? 1 : -1, mme::bondKindInfo(kind).arity > 2 ? 2 : -1);
     EXPECT_EQ(mme::sensitivityUnsupportedReason(one), "") << mme::bondKindInfo(kind).name;
