@@ -3,8 +3,10 @@
 // both read from the segment's one simulation.
 // Parameter blocks: the smooth genes (theta, shared by every segment, bounded as the search space)
 // and one state per segment (positions and velocity x h of the free particles, metres both). A
-// segment's Jacobian is by forward differences through the simulator (one short simulation per
-// column, shared by its two blocks); the continuity's derivative along the next state is -I
+// segment's Jacobian comes from forward sensitivities through the motion law (one simulation
+// carrying the derivatives, motion_sensitivity.h), or by forward differences through the
+// simulator (one short simulation per column) for a model they do not cover or when asked; it
+// is shared by the segment's two blocks; the continuity's derivative along the next state is -I
 // exactly. The linear solver is sparse Cholesky of the normal equations (block-tridiagonal states
 // bordered by theta).
 #include "motion_model_estimation/identification/estimators/output_error.h"
@@ -25,6 +27,7 @@
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/observations.h"
 #include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/identification/estimators/motion_sensitivity.h"
 
 namespace mme {
 
@@ -61,6 +64,7 @@ struct Problem {
   double h = 0.0;                   // frame period [s]
   double w_obs = 1.0;               // 1 / sigma
   double w_cont = 1.0;              // continuity_weight / sigma
+  bool exact_jacobian = true;       // forward sensitivities (else forward differences)
 
   int stateSize() const { return 6 * static_cast<int>(free_particles.size()); }
 };
@@ -135,11 +139,61 @@ class SegmentSimulation {
   }
 
  private:
-  /// Forward differences around residuals_ (which hold (theta, state)'s).
   void computeJacobian(const double* theta, const double* state) {
     const int np = static_cast<int>(p_->smooth.size()), ns = p_->stateSize();
     jac_theta_.assign(static_cast<size_t>(rows_) * np, 0.0);
     jac_state_.assign(static_cast<size_t>(rows_) * ns, 0.0);
+    if (p_->exact_jacobian) exactJacobian(theta, state);
+    else forwardDifferences(theta, state);
+  }
+
+  /// The rows' derivatives from one simulation carrying the sensitivities; model_ holds theta's
+  /// values (simulate() ran for the residuals).
+  void exactJacobian(const double* theta, const double* state) {
+    const int np = static_cast<int>(p_->smooth.size()), ns = p_->stateSize();
+    std::vector<ParamRef> refs;
+    for (int g : p_->smooth) refs.push_back(p_->space->gene(g).ref);
+    MotionSensitivity sens(model_, refs);
+    sens.setParameterColumns(theta_columns_);
+    sens.start(startState(state));
+    // Columns of the sensitivities -> the unknowns: d physical / d gene for theta; the state's
+    // velocities are v h.
+    const int c0 = sens.stateColumn0();
+    Eigen::VectorXd scale = Eigen::VectorXd::Ones(sens.columns());
+    if (theta_columns_) {
+      std::vector<double> genes = p_->base_genes;
+      for (int j = 0; j < np; ++j) genes[p_->smooth[j]] = theta[j];
+      for (int j = 0; j < np; ++j) scale[j] = p_->space->physicalSlope(p_->smooth[j], genes);
+    }
+    for (int j = 0; j < ns; ++j)
+      if (j % 6 >= 3) scale[c0 + j] = 1.0 / p_->h;
+    int r = 0;
+    const auto emit = [&](const MotionSensitivity::Matrix& m, int row, double weight) {
+      for (int j = 0; j < c0; ++j) jac_theta_[static_cast<size_t>(r) * np + j] = weight * scale[j] * m(row, j);
+      for (int j = 0; j < ns; ++j)
+        jac_state_[static_cast<size_t>(r) * ns + j] = weight * scale[c0 + j] * m(row, c0 + j);
+      ++r;
+    };
+    const auto observe = [&](int t) {
+      for (int i : p_->free_particles)
+        if (!p_->obs.isOccluded(t, i))
+          for (int c = 0; c < 3; ++c) emit(sens.dx(), 3 * i + c, p_->w_obs);
+    };
+    observe(first_);
+    for (int t = first_ + 1; t <= last_; ++t) {
+      sens.stepFrame(p_->h);
+      if (t < last_ || !has_next_) observe(t);
+    }
+    if (!has_next_) return;
+    for (int i : p_->free_particles) {
+      for (int c = 0; c < 3; ++c) emit(sens.dx(), 3 * i + c, p_->w_cont);
+      for (int c = 0; c < 3; ++c) emit(sens.dv(), 3 * i + c, p_->w_cont * p_->h);
+    }
+  }
+
+  /// Forward differences around residuals_ (which hold (theta, state)'s).
+  void forwardDifferences(const double* theta, const double* state) {
+    const int np = static_cast<int>(p_->smooth.size()), ns = p_->stateSize();
     std::vector<double> perturbed(rows_);
     std::vector<double> th(theta, theta + np);
     for (int j = 0; j < (theta_columns_ ? np : 0); ++j) {
@@ -176,21 +230,8 @@ class SegmentSimulation {
       sim_.setParameters(model_);
       theta_set_.assign(theta, theta + p_->smooth.size());
     }
-    const int n = p_->obs.particles;
-    State s;
-    s.x_m.resize(n);
-    s.v_mps.resize(n);
-    for (int i = 0; i < n; ++i) {
-      const double* x = p_->obs.position(first_, i);
-      s.x_m[i] = Eigen::Vector3d(x[0], x[1], x[2]);
-      s.v_mps[i] = model_.particles[i].velocity_mps;  // fixed particles keep the model's
-    }
+    State s = startState(state);
     const double h = p_->h;
-    for (size_t f = 0; f < p_->free_particles.size(); ++f) {
-      const int i = p_->free_particles[f];
-      s.x_m[i] = Eigen::Vector3d(state[6 * f], state[6 * f + 1], state[6 * f + 2]);
-      s.v_mps[i] = Eigen::Vector3d(state[6 * f + 3], state[6 * f + 4], state[6 * f + 5]) / h;
-    }
     int r = 0;
     const auto observe = [&](int t) {
       for (int i : p_->free_particles) {
@@ -215,6 +256,26 @@ class SegmentSimulation {
     for (int k = 0; k < rows_; ++k)
       if (!std::isfinite(out[k])) return false;
     return true;
+  }
+
+  /// The simulation's start: the free particles from `state`, the fixed ones where the data
+  /// see them at the first frame, with the model's velocity.
+  State startState(const double* state) const {
+    const int n = p_->obs.particles;
+    State s;
+    s.x_m.resize(n);
+    s.v_mps.resize(n);
+    for (int i = 0; i < n; ++i) {
+      const double* x = p_->obs.position(first_, i);
+      s.x_m[i] = Eigen::Vector3d(x[0], x[1], x[2]);
+      s.v_mps[i] = model_.particles[i].velocity_mps;  // fixed particles keep the model's
+    }
+    for (size_t f = 0; f < p_->free_particles.size(); ++f) {
+      const int i = p_->free_particles[f];
+      s.x_m[i] = Eigen::Vector3d(state[6 * f], state[6 * f + 1], state[6 * f + 2]);
+      s.v_mps[i] = Eigen::Vector3d(state[6 * f + 3], state[6 * f + 4], state[6 * f + 5]) / p_->h;
+    }
+    return s;
   }
 
   const Problem* p_;
@@ -354,6 +415,13 @@ std::string setUpProblem(const Model& model, const Trajectory& trajectory, const
       options.noise_std_m > 0.0 ? options.noise_std_m : std::max(estimateMarkerNoise(trajectory), 1e-9);
   p->w_obs = 1.0 / out->noise_std_prior_m;
   p->w_cont = options.continuity_weight / out->noise_std_prior_m;
+  p->exact_jacobian = options.jacobian == OutputErrorJacobian::kExact;
+  out->jacobian = "finite differences";
+  if (p->exact_jacobian) {
+    const std::string why_not = sensitivityUnsupportedReason(model);
+    p->exact_jacobian = why_not.empty();
+    out->jacobian = why_not.empty() ? "exact" : "finite differences: " + why_not;
+  }
   return "";
 }
 
@@ -451,7 +519,18 @@ int buildProblem(Problem* p, const ParameterSpace& space, SegmentUnknowns* u, ce
 
 ceres::Solver::Options solverOptions(const OutputErrorOptions& options) {
   ceres::Solver::Options solver;
-  solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  switch (options.linear_solver) {
+    case OutputErrorLinearSolver::kSparseNormalCholesky:
+      solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+      break;
+    case OutputErrorLinearSolver::kSparseSchur:
+      solver.linear_solver_type = ceres::SPARSE_SCHUR;
+      break;
+    case OutputErrorLinearSolver::kIterativeSchur:
+      solver.linear_solver_type = ceres::ITERATIVE_SCHUR;
+      solver.preconditioner_type = ceres::SCHUR_JACOBI;
+      break;
+  }
   solver.max_num_iterations = options.max_iterations;
   solver.num_threads = std::max(1, options.threads);
   solver.function_tolerance = 1e-14;
@@ -465,11 +544,18 @@ ceres::Solver::Options solverOptions(const OutputErrorOptions& options) {
   return solver;
 }
 
+/// Adds a solve's time split to the result's.
+void addTimes(const ceres::Solver::Summary& summary, OutputErrorResult* out) {
+  out->jacobian_time_s += summary.jacobian_evaluation_time_in_seconds;
+  out->linear_solver_time_s += summary.linear_solver_time_in_seconds;
+}
+
 /// The solve, with continuation when asked: soft continuity first, then the given weight (the
 /// cached residuals carry the weight: recomputed at each change). Returns the iterations.
 int solveWithContinuation(Problem* p, const OutputErrorOptions& options, double noise_std_prior_m,
                           const std::function<double()>& elapsed_s, SegmentUnknowns* u,
-                          ceres::Problem* problem, ceres::Solver::Summary* summary) {
+                          ceres::Problem* problem, ceres::Solver::Summary* summary,
+                          OutputErrorResult* out) {
   ceres::Solver::Options solver = solverOptions(options);
   // The start-state fits spent part of the budget.
   if (options.max_time_s > 0.0) solver.max_solver_time_in_seconds = std::max(1e-3, options.max_time_s - elapsed_s());
@@ -483,13 +569,17 @@ int solveWithContinuation(Problem* p, const OutputErrorOptions& options, double 
     p->w_cont = options.first_continuity_weight / noise_std_prior_m;
     for (auto& sim : u->sims) sim->invalidate();
     ceres::Solve(solver, problem, summary);
+    addTimes(*summary, out);
     first_stage_iterations = static_cast<int>(summary->iterations.size()) - 1;
     p->w_cont = hard_w_cont;
     for (auto& sim : u->sims) sim->invalidate();
     if (options.max_time_s > 0.0)
       solver.max_solver_time_in_seconds = std::max(1e-3, options.max_time_s - elapsed_s());
   }
-  if (!(options.cancel && options.cancel->load())) ceres::Solve(solver, problem, summary);
+  if (!(options.cancel && options.cancel->load())) {
+    ceres::Solve(solver, problem, summary);
+    addTimes(*summary, out);
+  }
   return first_stage_iterations + static_cast<int>(summary->iterations.size()) - 1;
 }
 
@@ -583,7 +673,8 @@ OutputErrorResult fitOnce(const Model& model, const Trajectory& trajectory,
   out.segments = u.count();
   out.start_cost_m2 = u.observationCost(*p);
   ceres::Solver::Summary summary;
-  out.iterations = solveWithContinuation(p.get(), options, out.noise_std_prior_m, elapsed_s, &u, &problem, &summary);
+  out.iterations = solveWithContinuation(p.get(), options, out.noise_std_prior_m, elapsed_s, &u, &problem,
+                                         &summary, &out);
   out.ran = true;
   out.converged = summary.termination_type == ceres::CONVERGENCE;
   out.stopped_by_time = !out.converged && options.max_time_s > 0.0 && elapsed_s() >= options.max_time_s;
@@ -626,6 +717,7 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
     stage.noise_std_m = std::max(estimateMarkerNoise(trajectory), 1e-9);
   std::vector<double> genes = start_genes;
   int iterations = 0, stages = 0;
+  double jacobian_time_s = 0.0, linear_solver_time_s = 0.0;
   for (long segments = options.grow_segments;; segments *= 2) {
     const bool last = segments * K + 1 >= trajectory.numFrames();
     stage.estimate_std = last && options.estimate_std;
@@ -639,6 +731,8 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
       return r;
     }
     iterations += r.iterations;
+    jacobian_time_s += r.jacobian_time_s;
+    linear_solver_time_s += r.linear_solver_time_s;
     ++stages;
     genes = r.genes;
     const bool stopped = (options.cancel && options.cancel->load()) ||
@@ -654,6 +748,8 @@ OutputErrorResult estimateOutputError(const Model& model, const Trajectory& traj
       }
       if (!last && !(options.cancel && options.cancel->load())) r.stopped_by_time = true;
       r.iterations = iterations;
+      r.jacobian_time_s = jacobian_time_s;
+      r.linear_solver_time_s = linear_solver_time_s;
       r.stages = stages;
       r.wall_time_s = elapsed_s();
       return r;

@@ -25,6 +25,23 @@ namespace mme {
 /// contributes only h^4 x''''. Robust (median of the squares). 0 when too few samples.
 double estimateMarkerNoise(const Trajectory& trajectory);
 
+/// How the output error forms its segments' Jacobians.
+enum class OutputErrorJacobian {
+  /// Forward sensitivities through the motion law (motion_sensitivity.h): exact, one
+  /// simulation per segment. A model they do not cover (sensitivityUnsupportedReason) falls
+  /// back to finite differences (OutputErrorResult::jacobian says why).
+  kExact,
+  /// Forward differences: one simulation per column; kept to compare against (bench).
+  kFiniteDifferences,
+};
+
+/// The linear solver of the output error's Gauss-Newton steps (Ceres' names).
+enum class OutputErrorLinearSolver {
+  kSparseNormalCholesky,  ///< J^T J of the whole problem, sparse Cholesky
+  kSparseSchur,           ///< every other segment state eliminated first, sparse Cholesky of the rest
+  kIterativeSchur,        ///< the same elimination, conjugate gradients (Schur-Jacobi preconditioner)
+};
+
 struct OutputErrorOptions {
   int segment_frames = 10;          ///< K: frames per shooting segment
   /// Weight of a continuity residual relative to an observation's: large = nearly hard (the
@@ -57,6 +74,8 @@ struct OutputErrorOptions {
   int grow_segments = 0;
   double max_time_s = 0.0;          ///< 0 = no limit
   int threads = 1;                  ///< Ceres' threads evaluating segments
+  OutputErrorJacobian jacobian = OutputErrorJacobian::kExact;
+  OutputErrorLinearSolver linear_solver = OutputErrorLinearSolver::kSparseNormalCholesky;
   bool estimate_std = true;         ///< 1-sigma std per parameter from the Jacobian at the optimum
   /// The std from noise_std_m as given (the Cramer-Rao bound) rather than from the residuals.
   bool std_from_given_noise = false;
@@ -92,6 +111,12 @@ struct OutputErrorResult {
   /// the answer is where the solver was, not an optimum.
   bool stopped_by_time = false;
   std::string termination;          ///< Ceres' message
+  /// "exact", or "finite differences" and, when exact ones were asked for, why not.
+  std::string jacobian;
+  /// Where the solves' time went (Ceres' summaries, every stage): forming the Jacobians, and the
+  /// linear solver (the normal equations or the Schur complement, and their factorisation) [s].
+  double jacobian_time_s = 0.0;
+  double linear_solver_time_s = 0.0;
   double wall_time_s = 0.0;
 };
 

@@ -1,0 +1,182 @@
+// The output error's Jacobians, exact (forward sensitivities) against forward differences, from
+// the same start in the same run: the `oe_speed` experiment of bench_paper.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "common.h"
+#include "experiments.h"
+#include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/identification/estimators/output_error.h"
+#include "motion_model_estimation/identification/search/parameter_space.h"
+#include "motion_model_estimation/identification/structure/marker_model.h"
+#include "motion_model_estimation/io/trajectory_io.h"
+#include "motion_model_estimation/scenes/random_object.h"
+
+namespace paper {
+
+namespace {
+
+double medianOf(std::vector<double> v) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  const size_t m = v.size();
+  return m % 2 ? v[m / 2] : 0.5 * (v[m / 2 - 1] + v[m / 2]);
+}
+
+const char* jacobianName(mme::OutputErrorJacobian j) {
+  return j == mme::OutputErrorJacobian::kExact ? "exact" : "finite_differences";
+}
+
+/// Runs one output-error fit on the case and writes its CSV line.
+struct Case {
+  std::string name;
+  Model search;
+  mme::Trajectory data;
+  const mme::ParameterSpace* space;
+  std::vector<double> start;
+  std::vector<double> truth;  // empty: no truth to compare
+  double bound_median_percent = NAN;
+};
+
+mme::OutputErrorResult fitCase(const Settings& s, std::FILE* f, const Case& c, const char* solver_name,
+                               mme::OutputErrorOptions o) {
+  o.threads = s.threads;
+  const mme::OutputErrorResult r = mme::estimateOutputError(c.search, c.data, *c.space, c.start, o);
+  std::vector<double> errors;
+  for (size_t k = 0; k < c.truth.size(); ++k) errors.push_back(100.0 * std::abs(r.values[k] / c.truth[k] - 1.0));
+  const double median = medianOf(errors);
+  const int iterations = std::max(1, r.iterations);
+  std::fprintf(f, "%s,%s,%s,%zu,%d,%d,%.3f,%.3f,%.3f,%d,%.4f,%d,%.6g,%.6g,%.4g\n", c.name.c_str(),
+               jacobianName(o.jacobian), solver_name, c.space->size(), c.data.numFrames(), o.max_iterations,
+               r.wall_time_s, r.jacobian_time_s, r.linear_solver_time_s, r.iterations,
+               r.wall_time_s / iterations, r.converged ? 1 : 0, median, c.bound_median_percent,
+               median / c.bound_median_percent);
+  std::fflush(f);
+  std::printf("oe_speed: %s %-18s %-22s %8.2f s (Jacobians %.2f s, linear solver %.2f s), %3d "
+              "iterations (%.3f s each), %s, cost %.6g m^2", c.name.c_str(), jacobianName(o.jacobian),
+              solver_name, r.wall_time_s, r.jacobian_time_s, r.linear_solver_time_s, r.iterations,
+              r.wall_time_s / iterations, r.converged ? "converged" : "not converged",
+              r.observation_cost_m2);
+  if (!c.truth.empty())
+    std::printf(", median error %.4g %% = %.2f x the bound", median, median / c.bound_median_percent);
+  std::printf("; jacobian: %s\n", r.jacobian.c_str());
+  std::fflush(stdout);
+  return r;
+}
+
+const std::vector<std::pair<const char*, mme::OutputErrorLinearSolver>>& solvers() {
+  static const std::vector<std::pair<const char*, mme::OutputErrorLinearSolver>> kSolvers = {
+      {"sparse_normal_cholesky", mme::OutputErrorLinearSolver::kSparseNormalCholesky},
+      {"sparse_schur", mme::OutputErrorLinearSolver::kSparseSchur},
+      {"iterative_schur", mme::OutputErrorLinearSolver::kIterativeSchur}};
+  return kSolvers;
+}
+
+}  // namespace
+
+/// Two cases:
+/// - random43: the big soak model (43 markers, 91 damped spring types, 273 unknowns), 240
+///   frames at 120 Hz, 0.1 mm of noise, started 2 % off the truth (alternating signs in search
+///   space). First a few iterations of every (Jacobian, linear solver) pair from the same start
+///   (the time of an iteration), then the whole fit with exact Jacobians and the fastest
+///   solver, then today's (forward differences, sparse normal Cholesky) whole fit: wall times,
+///   their ratio, the median relative error and its ratio to the Cramer-Rao bound's median.
+/// - walk39: motion_capture_walk (238 frames) with markerModel's 39 damped springs and a
+///   free gravity (120 unknowns, the size its structure selection leaves), from the search
+///   space's initial centres, a few iterations each way: the time per iteration.
+void outputErrorSpeed(const Settings& s) {
+  std::FILE* f = openCsv(s.out_dir + "/oe_speed.csv",
+                         "case,jacobian,linear_solver,unknowns,frames,max_iterations,wall_s,jacobian_s,"
+                         "linear_solver_s,iterations,s_per_iteration,converged,median_error_percent,"
+                         "bound_median_percent,error_over_bound");
+  const int probe_iterations = s.quick ? 2 : 4;
+  {
+    const std::string path = std::string(MME_TEST_DATA_DIR) + "/real/motion_capture_walk.trc";
+    Case c;
+    c.name = "walk39";
+    c.data = mme::readTrajectoryFile(path);  // 238 frames
+    c.search = mme::markerModel(c.data, 39);
+    const mme::ParameterSpace space(c.search, c.data);
+    c.space = &space;
+    for (size_t k = 0; k < space.size(); ++k) c.start.push_back(space.gene(k).init_center);
+    for (const auto& solver : solvers()) {
+      mme::OutputErrorOptions o;
+      o.linear_solver = solver.second;
+      o.max_iterations = probe_iterations;
+      o.estimate_std = false;
+      fitCase(s, f, c, solver.first, o);
+    }
+    mme::OutputErrorOptions o;
+    o.jacobian = mme::OutputErrorJacobian::kFiniteDifferences;
+    o.max_iterations = probe_iterations;
+    o.estimate_std = false;
+    fitCase(s, f, c, solvers().front().first, o);
+  }
+  {
+    mme::RandomObjectSpec spec;  // as bench_paper's online experiment and the soak's big model
+    spec.particles = 43;
+    spec.bond_types = 91;
+    spec.bonds = 91;
+    spec.damping_max_nspm = 0.05;
+    const Model truth = mme::makeRandomObject(spec);
+    const int frames = s.quick ? 120 : 240;
+    const double noise_m = 1e-4;
+    const mme::Trajectory clean = mme::simulateTrajectory(truth, frames, truth.frame_rate_hz);
+    Case c;
+    c.name = "random43";
+    c.data = clean;
+    mme::addGaussianNoise(&c.data, noise_m, 41);
+    c.truth = mme::getValues(truth, mme::freeParameters(truth));
+    c.search = forgetFreeValues(truth);
+    const mme::ParameterSpace space(c.search, c.data);
+    c.space = &space;
+    c.start = space.toSearch(c.truth);
+    for (size_t k = 0; k < c.start.size(); ++k) c.start[k] = space.reflect(k, c.start[k] + (k % 2 ? 0.02 : -0.02));
+    // The time of an iteration: every pair, a few iterations per continuity stage.
+    std::pair<const char*, mme::OutputErrorLinearSolver> fastest = solvers().front();
+    double fastest_s = INFINITY;
+    for (const auto& solver : solvers()) {
+      mme::OutputErrorOptions o;
+      o.linear_solver = solver.second;
+      o.max_iterations = probe_iterations;
+      o.estimate_std = false;
+      const mme::OutputErrorResult r = fitCase(s, f, c, solver.first, o);
+      const double per_iteration = r.wall_time_s / std::max(1, r.iterations);
+      if (per_iteration < fastest_s) {
+        fastest_s = per_iteration;
+        fastest = solver;
+      }
+    }
+    {
+      mme::OutputErrorOptions o;
+      o.jacobian = mme::OutputErrorJacobian::kFiniteDifferences;
+      o.max_iterations = probe_iterations;
+      o.estimate_std = false;
+      fitCase(s, f, c, solvers().front().first, o);
+    }
+    const mme::ParameterSpace truth_space(truth, clean);
+    const auto bound_began = std::chrono::steady_clock::now();
+    const std::vector<double> bound = mme::cramerRaoBound(truth, clean, truth_space, noise_m);
+    const double bound_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - bound_began).count();
+    std::vector<double> bound_rel;
+    for (size_t k = 0; k < bound.size(); ++k) bound_rel.push_back(100.0 * bound[k] / std::abs(c.truth[k]));
+    c.bound_median_percent = medianOf(bound_rel);
+    std::printf("oe_speed: random43: %zu unknowns, %d frames, Cramer-Rao bound median %.4g %% (%.1f s)\n",
+                c.truth.size(), frames, c.bound_median_percent, bound_s);
+    mme::OutputErrorOptions exact;
+    exact.linear_solver = fastest.second;
+    const double exact_s = fitCase(s, f, c, fastest.first, exact).wall_time_s;
+    mme::OutputErrorOptions today;
+    today.jacobian = mme::OutputErrorJacobian::kFiniteDifferences;
+    today.linear_solver = mme::OutputErrorLinearSolver::kSparseNormalCholesky;
+    const double today_s = fitCase(s, f, c, solvers().front().first, today).wall_time_s;
+    std::printf("oe_speed: random43: today's fit / exact with %s = %.2f\n", fastest.first, today_s / exact_s);
+  }
+  std::fclose(f);
+}
+
+}  // namespace paper
