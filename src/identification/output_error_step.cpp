@@ -63,6 +63,9 @@ OutputErrorOutcome OutputErrorStep::run(const std::vector<double>& one_step_gene
     return out_;
   }
   double best_rms_m = judge(model_, best.genes);
+  // Too few substeps for the model's stiffness can make a model that explains the motion look
+  // like one that does not: the trial comes before the judgement.
+  trySubsteps(&best, &best_rms_m);
   const std::string horizon = std::to_string(kJudgeHorizonFrames) + " frames ahead";
   const bool stopped_early = misfit(best) && !(best_rms_m < (1.0 - kWorthwhileGain) * out_.one_step_judged_rms_m);
   if (stopped_early) {
@@ -70,11 +73,10 @@ OutputErrorOutcome OutputErrorStep::run(const std::vector<double>& one_step_gene
           formatValue(best.noise_std_m / std::max(noise_estimate_m_, 1e-9)) +
           "x the markers' noise (the model does not explain the motion), and predicts " + horizon + " " +
           formatJudged(best_rms_m) + " against " + formatJudged(out_.one_step_judged_rms_m) +
-          " for the one-step answer: its later stages (substep trial, final fit) are not run");
+          " for the one-step answer: the final fit is not run");
     if (options_.estimate_std)
       out_.std_missing_reason = "the output error stopped after its first stage, whose uncertainty is not computed";
   } else {
-    trySubsteps(&best, &best_rms_m);
     finalFit(&best, &best_rms_m);
   }
   noteFit(best, stopped_early);
