@@ -14,6 +14,7 @@
 #include "motion_model_estimation/core/stiffness.h"
 #include "motion_model_estimation/identification/estimators/equation_error.h"
 #include "motion_model_estimation/identification/search/residual_jacobian.h"
+#include "output_error_step.h"
 
 namespace mme {
 
@@ -113,14 +114,8 @@ constexpr double kExactFitRms_m = 1e-9;
 /// Converged: the best cost fell by less than this share over the patience generations (a
 /// crawl that small moves no parameter that matters; noisy costs crawl for hundreds).
 constexpr double kPatienceShare = 1e-4;
-/// An output-error residual this many times the data's noise estimate is a misfit worth a word.
-constexpr double kMisfitFactor = 2.0;
-/// Output-error iterations a start gets before the best start is fitted to convergence.
-constexpr int kScoutIterations = 15;
 /// The one-step cost is starved when its terms are fewer than this share of the observed samples.
 constexpr double kStarvedShare = 0.5;
-/// Most substeps per frame the stiff-scene rule asks for.
-constexpr int kMaxSubsteps = 64;
 
 std::string formatValue(double v) {
   char text[32];
@@ -473,141 +468,25 @@ class Identification {
     return output_error;
   }
 
-  /// The output error's starts: the search's answer and the smoothed equation-error solutions
-  /// (the one-step optimum is biased by noise, badly so at a millimetre).
-  std::vector<std::vector<double>> outputErrorStarts() const {
-    std::vector<std::vector<double>> starts{best_genes_};
-    for (int half_width : {3, 8}) {
-      EquationErrorOptions o;
-      o.smoothing_half_width = half_width;
-      const EquationErrorResult ee = solveEquationError(model_, trajectory_, o);
-      if (!ee.applicable) break;
-      std::vector<double> g = best_genes_;
-      for (size_t k = 0; k < space_->size(); ++k) {
-        const Gene& gene = space_->gene(k);
-        const double v = ee.values[k];
-        if (!gene.smooth || gene.clamp_length || !std::isfinite(v) || (gene.log_scale && !(v > 0.0)))
-          continue;
-        g[k] = space_->reflect(k, gene.log_scale ? std::log(v) : v);
-      }
-      starts.push_back(g);
-    }
-    return starts;
-  }
-
-  /// An output-error fit of `m` from `from`, within what is left of the time limit.
-  OutputErrorResult fit(const Model& m, const std::vector<double>& from, int max_iterations,
-                        bool estimate_std) const {
-    OutputErrorOptions o = options_.output_error;
-    o.max_iterations = std::min(o.max_iterations, max_iterations);
-    o.threads = std::max(o.threads, options_.es.threads);
-    if (options_.max_wall_time_s > 0.0) {
-      const double left = options_.max_wall_time_s - elapsed();
-      if (left <= 0.0) {
-        OutputErrorResult none;
-        none.reason = "no time left";
-        none.stopped_by_time = true;
-        return none;
-      }
-      o.max_time_s = o.max_time_s > 0.0 ? std::min(o.max_time_s, left) : left;
-    }
-    o.estimate_std = estimate_std;
-    if (options_.cancel) o.cancel = options_.cancel;
-    return estimateOutputError(m, trajectory_, *space_, from, o);
-  }
-
-  /// A fit that ran but ended non-finite (Ceres could not evaluate the residuals, e.g. a rollout
-  /// that blew up) is no answer.
-  static bool usable(const OutputErrorResult& oe) { return oe.ran && std::isfinite(oe.observation_cost_m2); }
-
-  /// Each start scouted with a few iterations; the lowest output-error cost wins. *failed: why
-  /// a fit that ran was unusable.
-  OutputErrorResult scoutStarts(std::string* failed) const {
-    OutputErrorResult best_oe;
-    for (const std::vector<double>& from : outputErrorStarts()) {
-      OutputErrorResult oe = fit(model_, from, kScoutIterations, false);
-      if (oe.ran && !usable(oe)) *failed = oe.termination;
-      if (!usable(oe)) oe.ran = false;
-      if (oe.ran && (!best_oe.ran || oe.observation_cost_m2 < best_oe.observation_cost_m2)) best_oe = oe;
-      // A fit as good as the noise allows needs no other start.
-      if (best_oe.ran && best_oe.noise_std_m <= 1.2 * best_oe.noise_std_prior_m) break;
-    }
-    return best_oe;
-  }
-
-  /// Stiff scenes: semi-implicit Euler drifts as (omega h)^2; a finer integrator is kept when
-  /// the simulated motion fits the frames clearly better (data made by a coarse integrator,
-  /// e.g. a simulation with one step per frame, keep theirs).
-  void trySubsteps(OutputErrorResult* best_oe) {
-    if (!(options_.max_omega_h_per_substep > 0.0) ||
-        !(omega_h_ / model_.substeps > options_.max_omega_h_per_substep))
-      return;
-    const int needed = std::min(kMaxSubsteps, static_cast<int>(std::ceil(omega_h_ / options_.max_omega_h_per_substep)));
-    if (needed <= model_.substeps) return;
-    Model finer = model_;
-    finer.substeps = needed;
-    const OutputErrorResult oe = fit(finer, best_oe->genes, kScoutIterations, false);
-    time_cut_ = time_cut_ || oe.stopped_by_time;
-    const std::string head = "the stiffest mode has omega*h = " + formatValue(omega_h_) + " per frame: " +
-                             std::to_string(needed) + " substeps per frame ";
-    if (!usable(oe)) {  // no cost to compare: say why instead of a cost of 0
-      note(head + "could not be tried (" + (oe.ran ? oe.termination : oe.reason) + "): kept " +
-           std::to_string(model_.substeps));
-      return;
-    }
-    const bool better = oe.observation_cost_m2 < 0.5 * best_oe->observation_cost_m2;
-    note(head + "fit the frames " + (better ? "better" : "no better") +
-         " than " + std::to_string(model_.substeps) + " (output-error cost " +
-         formatValue(oe.observation_cost_m2) + " against " + formatValue(best_oe->observation_cost_m2) +
-         " m^2): " + (better ? "the model now uses " + std::to_string(needed) : "kept " + std::to_string(model_.substeps)));
-    if (better) {
-      model_ = finer;
-      *best_oe = oe;
-    }
-  }
-
-  /// The output error from the best start, to convergence; its answer replaces the search's
-  /// (a fit that failed leaves the one-step answer, with a warning).
+  /// The output error (output_error_step.h) from the search's answer; its answer replaces the
+  /// search's only where the judge says it predicts no worse.
   void runOutputError() {
-    std::string failed;
-    OutputErrorResult best_oe = scoutStarts(&failed);
-    if (!best_oe.ran && options_.max_wall_time_s > 0.0 && elapsed() >= options_.max_wall_time_s) time_cut_ = true;
-    if (best_oe.ran) omega_h_ = omegaH(best_oe.values);
-    if (best_oe.ran) trySubsteps(&best_oe);
-    if (!best_oe.ran) {
-      if (!failed.empty()) note("warning: the output-error fit failed (" + failed + "): the one-step fit is kept");
-      return;
-    }
-    const OutputErrorResult oe = fit(model_, best_oe.genes, options_.output_error.max_iterations, options_.estimate_std);
-    time_cut_ = time_cut_ || oe.stopped_by_time || best_oe.stopped_by_time;
-    if (usable(oe) && oe.observation_cost_m2 <= best_oe.observation_cost_m2 * (1.0 + 1e-9)) best_oe = oe;
-    else if (options_.estimate_std)  // the scouts' answer stands, and they estimate no std
-      r_.std_missing_reason =
-          oe.stopped_by_time ? "the time limit cut the output-error fit before its uncertainty was computed"
-          : usable(oe)       ? "the final output-error fit ended no better than its start, whose uncertainty is not computed"
-                             : "the final output-error fit failed (" + (oe.ran ? oe.termination : oe.reason) + ")";
-    noteOutputError(best_oe);
-    best_genes_ = best_oe.genes;
-    r_.values = best_oe.values;
-    r_.global_cost = best_oe.observation_cost_m2;
-    r_.noise_std_m = best_oe.noise_std_m;
+    OutputErrorStep step(model_, trajectory_, *space_, options_, reference_, [this] { return elapsed(); },
+                         [this](const std::string& text) { note(text); });
+    const OutputErrorOutcome outcome = step.run(best_genes_, r_.noise_estimate_m);
+    time_cut_ = time_cut_ || outcome.time_cut;
+    if (!outcome.adopted) return;
+    const OutputErrorResult& oe = outcome.fit;
+    model_.substeps = outcome.substeps;
+    best_genes_ = oe.genes;
+    r_.values = oe.values;
+    r_.global_cost = oe.observation_cost_m2;
+    r_.noise_std_m = oe.noise_std_m;
     r_.estimator = Estimator::kOutputError;
-    std_devs_ = best_oe.std_devs;
-    unidentifiable_ = best_oe.unidentifiable;
+    r_.std_missing_reason = outcome.std_missing_reason;
+    std_devs_ = oe.std_devs;
+    unidentifiable_ = oe.unidentifiable;
     omega_h_ = omegaH(r_.values);
-  }
-
-  void noteOutputError(const OutputErrorResult& oe) {
-    note("output error: " + std::to_string(oe.segments) + " segments, " + std::to_string(oe.iterations) +
-         " iterations of the final fit (" +
-         (oe.stages > 1 ? "over " + std::to_string(oe.stages) + " stages growing the data, " : std::string()) +
-         (oe.converged ? "converged" : oe.termination) + "), marker noise from its residuals " +
-         formatValue(oe.noise_std_m) + " m (from the data " + formatValue(r_.noise_estimate_m) + " m)");
-    if (oe.noise_std_m > kMisfitFactor * std::max(r_.noise_estimate_m, 1e-9))
-      note("warning: the output-error residual (" + formatValue(oe.noise_std_m) + " m RMS) is " +
-           formatValue(oe.noise_std_m / std::max(r_.noise_estimate_m, 1e-9)) +
-           "x the markers' noise: the model does not explain the motion (missing bonds or "
-           "kinds, a wrong structure, or too few substeps for its stiffness)");
   }
 
   /// A threshold is known only up to the flat interval between the observed lengths where its

@@ -4,11 +4,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 
 #include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/core/stiffness.h"
+#include "motion_model_estimation/identification/estimators/answer_judge.h"
 #include "motion_model_estimation/identification/identifier.h"
 #include "motion_model_estimation/scenes/random_object.h"
+#include "motion_model_estimation/scenes/scenes.h"
 #include "test_helpers.h"
 
 namespace {
@@ -21,6 +25,55 @@ struct Hanging {
   mme::Trajectory data = mme::simulateTrajectory(truth, 240, truth.frame_rate_hz);
   std::vector<double> true_values = mme::getValues(truth, mme::freeParameters(truth));
 };
+
+bool anyNote(const mme::IdentifyResult& r, const std::string& text) {
+  for (const std::string& note : r.notes)
+    if (note.find(text) != std::string::npos) return true;
+  return false;
+}
+
+// A stiff scene integrated at one substep per frame: paper_object at omega h = 2.5 (semi-implicit
+// Euler's stable range ends at 2), the data from 20 substeps with 0.1 mm noise, the model at 1.
+// The one-step cost predicts one frame at a time and stays usable; the output error's rollouts
+// over 10-frame segments blow up.
+struct StiffAtOneSubstep {
+  mme::Model truth = mme::makeScene("paper_object").model;
+  mme::Trajectory data;
+  mme::Model search;
+  StiffAtOneSubstep() {
+    std::vector<Eigen::Vector3d> x;
+    for (const mme::Particle& p : truth.particles) x.push_back(p.position_m);
+    truth.frame_rate_hz = mme::stiffestModeRadPerS(truth, x) / 2.5;
+    truth.substeps = 20;
+    data = mme::simulateTrajectory(truth, 60, truth.frame_rate_hz);
+    mme::addGaussianNoise(&data, 1e-4, 7);
+    search = mme::test::withoutValues(truth);
+    search.substeps = 1;
+  }
+};
+
+// With the model's integrator kept (no substep trial) the output error's answer predicts 10
+// frames ahead far worse than the one-step answer it would replace: the identification ends with
+// the one-step answer (bit for bit the one-step cost's), says why in a warning, and does not run
+// the final fit.
+TEST(Identifier, AnOutputErrorThatBlowsUpLeavesTheBetterAnswerWithAWarning) {
+  StiffAtOneSubstep s;
+  mme::IdentifyOptions options = mme::identifyOptionsFor(mme::Preset::kDefault);
+  options.estimate_std = false;
+  options.es.threads = 1;
+  options.max_omega_h_per_substep = 0.0;
+  const mme::IdentifyResult r = mme::identifyModel(s.search, s.data, options);
+  EXPECT_EQ(r.estimator, mme::Estimator::kShortTerm);
+  EXPECT_EQ(r.substeps, 1);
+  EXPECT_TRUE(anyNote(r, "warning: judged 10 frames ahead")) << "no warning";
+  EXPECT_TRUE(anyNote(r, "the output error's answer is worse and not adopted"));
+  EXPECT_TRUE(anyNote(r, "the final fit is not run"));
+  options.cost = mme::CostChoice::kShortTerm;
+  const mme::IdentifyResult one_step = mme::identifyModel(s.search, s.data, options);
+  EXPECT_EQ(r.values, one_step.values);
+  EXPECT_EQ(r.global_cost, one_step.global_cost);
+  EXPECT_TRUE(std::isfinite(mme::judgedPredictionRms_m(r.model, s.data)));
+}
 
 TEST(Identifier, DefaultEngineIdentifiesAHangingObjectWithoutBoundsAndStopsOnceConverged) {
   Hanging h;

@@ -10,6 +10,7 @@
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/core/observations.h"
+#include "motion_model_estimation/identification/estimators/answer_judge.h"
 #include "motion_model_estimation/identification/estimators/output_error.h"
 #include "motion_model_estimation/identification/estimators/prediction_error.h"
 #include "motion_model_estimation/identification/search/threshold_search.h"
@@ -123,6 +124,21 @@ bool staysBounded(const Model& best, const Trajectory& window, int rollout_frame
 }
 
 
+/// Whether an output-error fit on `window` may replace the one-step answer at `one_step_genes`:
+/// finite, not far above its start's cost (a fit that blew up on the way), and judged K frames
+/// ahead on the window no worse (answer_judge.h).
+bool outputErrorAdoptable(const Model& model, const Trajectory& window, const ParameterSpace& space,
+                          const std::vector<double>& one_step_genes, const OutputErrorResult& oe) {
+  constexpr double kDivergedFactor = 10.0;  // as the offline identification's output-error step
+  if (!oe.ran || !std::isfinite(oe.observation_cost_m2) ||
+      (oe.start_cost_m2 > 0.0 && oe.observation_cost_m2 > kDivergedFactor * oe.start_cost_m2))
+    return false;
+  Model one_step = model, fitted = model;
+  setValues(one_step, space.refs(), space.toPhysical(one_step_genes));
+  setValues(fitted, space.refs(), oe.values);
+  return replacesStanding(judgedPredictionRms_m(fitted, window), judgedPredictionRms_m(one_step, window));
+}
+
 }  // namespace
 
 struct OnlineEstimator::BackgroundRefinement {
@@ -130,6 +146,9 @@ struct OnlineEstimator::BackgroundRefinement {
   std::atomic<bool> done{false};
   RefineResult result;       // written by the thread before `done`
   OutputErrorResult output;  // likewise, when the output-error fit ran
+  // The output-error fit predicts the window no worse than the refined one-step answer and did
+  // not diverge (answer_judge.h); written with `output`.
+  bool output_adopted = false;
   std::thread thread;
   ~BackgroundRefinement() {
     cancel = true;
@@ -182,6 +201,7 @@ void OnlineEstimator::startRefinement(std::shared_ptr<const Cost> cost, const Mo
           oe_options.cancel = &out->cancel;
           out->output = estimateOutputError(model, window, space,
                                             warm.empty() ? out->result.genes : warm, oe_options);
+          out->output_adopted = outputErrorAdoptable(model, window, space, out->result.genes, out->output);
         }
       }
     } catch (const std::exception&) {
@@ -198,11 +218,17 @@ void OnlineEstimator::handOverRefinement() {
   if (refinement_->thread.joinable()) refinement_->thread.join();
   const RefineResult result = refinement_->result;
   const OutputErrorResult output = refinement_->output;
+  const bool adopted = refinement_->output_adopted;
   refinement_.reset();
   if (result.evaluations > 0) es_->offer(result.genes);
-  if (output.ran) {
+  if (output.ran && adopted) {
     output_error_ = output;
     es_->offer(output.genes);  // a good start for the global search too
+  } else if (output.ran) {
+    // Diverged, or predicts worse than the one-step answer: the population's best is published
+    // and the next fit starts from the refined best instead of this answer.
+    output_error_ = OutputErrorResult();
+    ++output_error_rejections_;
   }
   ++refinements_done_;
   last_refine_status_ = result.status;
@@ -420,6 +446,7 @@ bool OnlineEstimator::update() {
   e.refinements = refinements_done_;
   e.last_refine_status = last_refine_status_;
   e.estimator = Estimator::kShortTerm;
+  e.output_error_rejections = output_error_rejections_;
   std::vector<double> genes = es_->best().genes;
   const bool from_output_error = use_output_error_ && output_error_.ran;
   e.std_devs = eliteStdDevs(*es_, e.values.size());

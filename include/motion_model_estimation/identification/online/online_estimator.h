@@ -70,6 +70,9 @@ struct Estimate {
   Estimator estimator = Estimator::kShortTerm;
   std::vector<ParameterFlag> parameter_flags;  ///< per parameter
   double noise_std_m = 0.0;         ///< output error: the marker noise its residuals show
+  /// Output-error fits not adopted so far (diverged, or predicting the window worse than the
+  /// one-step answer, answer_judge.h): the one-step answer was published instead.
+  uint32_t output_error_rejections = 0;
   bool valid = false;               ///< false until the first update
   uint32_t generation = 0;
   uint64_t evaluations = 0;
@@ -197,6 +200,7 @@ class OnlineEstimator {
   RefineStatus last_refine_status_ = RefineStatus::kNotRun;
   bool use_output_error_ = false;   // decided when the population starts
   OutputErrorResult output_error_;  // the last output-error fit (ran = false before the first)
+  uint32_t output_error_rejections_ = 0;  // fits not adopted (Estimate::output_error_rejections)
   mutable std::mutex estimate_mutex_;  // guards estimate_ (readers never wait for an update)
   Estimate estimate_;
 };
