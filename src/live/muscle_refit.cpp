@@ -1,5 +1,6 @@
 #include "motion_model_estimation/live/muscle_refit.h"
 
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <algorithm>
@@ -104,7 +105,14 @@ void addFrameRows(const Model& model, const Model& known, Simulator& sim, const 
   }
 }
 
+/// Above this many unknowns the refit iterates from the current values instead of factorising:
+/// a body of 40 markers couples most of its muscles through shared particles, and a sparse
+/// factor of a few thousand unknowns then fills in to a dense one.
+constexpr int kDirectSolveMaxUnknowns = 1500;
+constexpr int kIterations = 200;
+
 /// Ridge-regularised least squares in columns scaled to unit RMS; unused columns stay 0.
+/// `theta` holds the current values on entry (the iterative solve starts there).
 bool solveScaled(const Eigen::SparseMatrix<double>& J, const Eigen::VectorXd& y, double relative_ridge,
                  Eigen::VectorXd* theta) {
   const int rows = static_cast<int>(J.rows()), cols = static_cast<int>(J.cols());
@@ -123,12 +131,36 @@ bool solveScaled(const Eigen::SparseMatrix<double>& J, const Eigen::VectorXd& y,
   Eigen::SparseMatrix<double> ridge(cols, cols);
   ridge.setIdentity();
   A += (relative_ridge > 0.0 ? relative_ridge * mean_diagonal : 1e-12 * mean_diagonal) * ridge;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(A);
-  if (solver.info() != Eigen::Success) return false;
-  const Eigen::VectorXd scaled = solver.solve(Js.transpose() * y);
-  if (solver.info() != Eigen::Success || !scaled.allFinite()) return false;
+  const Eigen::VectorXd rhs = Js.transpose() * y;
+  Eigen::VectorXd scaled;
+  if (cols <= kDirectSolveMaxUnknowns) {
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(A);
+    if (solver.info() != Eigen::Success) return false;
+    scaled = solver.solve(rhs);
+    if (solver.info() != Eigen::Success) return false;
+  } else {
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> solver;
+    solver.setMaxIterations(kIterations);
+    solver.setTolerance(1e-8);
+    solver.compute(A);
+    const Eigen::VectorXd start = scale.asDiagonal() * (*theta);
+    scaled = solver.solveWithGuess(rhs, start.allFinite() ? start : Eigen::VectorXd::Zero(cols));
+  }
+  if (!scaled.allFinite()) return false;
   *theta = inverse.asDiagonal() * scaled;
   return true;
+}
+
+/// gain x network of every refitted type, in column order: the values the solve starts from.
+Eigen::VectorXd currentTheta(const Model& model, const std::vector<int>& first_column, int unknowns) {
+  Eigen::VectorXd theta = Eigen::VectorXd::Zero(unknowns);
+  for (size_t k = 0; k < model.bond_types.size(); ++k) {
+    if (first_column[k] < 0) continue;
+    const BondType& type = model.bond_types[k];
+    for (size_t m = 0; m < type.network.size(); ++m)
+      theta(first_column[k] + static_cast<int>(m)) = type.value(kGain) * type.network[m].value;
+  }
+  return theta;
 }
 
 }  // namespace
@@ -173,7 +205,7 @@ MuscleRefitResult refitMuscleActivations(const Model& model, const Trajectory& w
   Eigen::SparseMatrix<double> J(r.rows, r.unknowns);
   J.setFromTriplets(sys.entries.begin(), sys.entries.end());
   const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXd>(sys.target.data(), r.rows);
-  Eigen::VectorXd theta;
+  Eigen::VectorXd theta = currentTheta(model, first_column, r.unknowns);
   if (!solveScaled(J, y, relative_ridge, &theta)) {
     r.why = "the least-squares solve failed";
     return r;
