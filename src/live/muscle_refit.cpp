@@ -105,16 +105,15 @@ void addFrameRows(const Model& model, const Model& known, Simulator& sim, const 
   }
 }
 
-/// Above this many unknowns the refit iterates from the current values instead of factorising:
-/// a body of 40 markers couples most of its muscles through shared particles, and a sparse
-/// factor of a few thousand unknowns then fills in to a dense one.
-constexpr int kDirectSolveMaxUnknowns = 1500;
+/// Conjugate-gradient iterations at most, above the direct solve's size: a body of 40 markers
+/// couples most of its muscles through shared particles, and a sparse factor of a few thousand
+/// unknowns fills in to a dense one.
 constexpr int kIterations = 200;
 
 /// Ridge-regularised least squares in columns scaled to unit RMS; unused columns stay 0.
 /// `theta` holds the current values on entry (the iterative solve starts there).
 bool solveScaled(const Eigen::SparseMatrix<double>& J, const Eigen::VectorXd& y, double relative_ridge,
-                 Eigen::VectorXd* theta) {
+                 int direct_max_unknowns, Eigen::VectorXd* theta) {
   const int rows = static_cast<int>(J.rows()), cols = static_cast<int>(J.cols());
   Eigen::VectorXd scale(cols);
   for (int c = 0; c < cols; ++c) scale(c) = std::sqrt(J.col(c).squaredNorm() / rows);
@@ -133,7 +132,7 @@ bool solveScaled(const Eigen::SparseMatrix<double>& J, const Eigen::VectorXd& y,
   A += (relative_ridge > 0.0 ? relative_ridge * mean_diagonal : 1e-12 * mean_diagonal) * ridge;
   const Eigen::VectorXd rhs = Js.transpose() * y;
   Eigen::VectorXd scaled;
-  if (cols <= kDirectSolveMaxUnknowns) {
+  if (cols <= direct_max_unknowns) {
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(A);
     if (solver.info() != Eigen::Success) return false;
     scaled = solver.solve(rhs);
@@ -170,7 +169,8 @@ int refittableMuscleTypes(const Model& model) {
 }
 
 MuscleRefitResult refitMuscleActivations(const Model& model, const Trajectory& window,
-                                         double relative_ridge, double gain_margin) {
+                                         double relative_ridge, double gain_margin,
+                                         int direct_max_unknowns) {
   MuscleRefitResult r;
   r.model = model;
   const int types = static_cast<int>(model.bond_types.size());
@@ -206,7 +206,7 @@ MuscleRefitResult refitMuscleActivations(const Model& model, const Trajectory& w
   J.setFromTriplets(sys.entries.begin(), sys.entries.end());
   const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXd>(sys.target.data(), r.rows);
   Eigen::VectorXd theta = currentTheta(model, first_column, r.unknowns);
-  if (!solveScaled(J, y, relative_ridge, &theta)) {
+  if (!solveScaled(J, y, relative_ridge, direct_max_unknowns, &theta)) {
     r.why = "the least-squares solve failed";
     return r;
   }

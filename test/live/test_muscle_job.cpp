@@ -65,6 +65,22 @@ TEST(MuscleRefit, RecoversALinearControllerFromItsData) {
   EXPECT_LT(predict10M(r.model, data), 1e-2 * predict10M(silent, data));
 }
 
+TEST(MuscleRefit, TheIterativeSolveFromTheCurrentValuesFindsTheSameFit) {
+  // What a large body gets (above the direct solve's size): conjugate gradients started at the
+  // model's values; on 5 unknowns they reach the direct solve's answer.
+  const Model truth = linearMuscleObject();
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 200, truth.frame_rate_hz);
+  Model start = truth;
+  for (mme::Param& p : start.bond_types[start.bondTypeIndex("m")].network) p.value *= 0.5;
+  const mme::MuscleRefitResult direct = mme::refitMuscleActivations(start, data, 1e-3);
+  const mme::MuscleRefitResult iterative = mme::refitMuscleActivations(start, data, 1e-3, 10.0, 0);
+  ASSERT_TRUE(direct.ok && iterative.ok);
+  for (int k = 0; k < 5; ++k)
+    EXPECT_NEAR(linearWeight(iterative.model, "m", k), linearWeight(direct.model, "m", k),
+                1e-6 * std::abs(linearWeight(direct.model, "m", k)) + 1e-12)
+        << "network value " << k;
+}
+
 TEST(MuscleRefit, SaysWhyWhenThereIsNothingToRefit) {
   const Model truth = linearMuscleObject();
   const mme::Trajectory data = mme::simulateTrajectory(truth, 50, truth.frame_rate_hz);

@@ -27,13 +27,14 @@ struct MuscleRefitResult {
 /// marker stay where the model holds them). A frame gives equations when every free particle
 /// is seen in it and in the frames before and after. `relative_ridge`: the ridge relative to
 /// the mean diagonal of the normal matrix in columns scaled to unit RMS (as the sensor muscles'
-/// own fit); solved by a sparse factorisation up to 1500 unknowns, above by at most 200
+/// own fit); solved by a sparse factorisation up to `direct_max_unknowns`, above by at most 200
 /// conjugate-gradient iterations started at the model's current values (an update, not a new
 /// fit: a large body's factor fills in). `gain_margin`: each gain becomes this many times its muscle's largest linear
 /// activation over the window (tanh then stays near linear where the data went). Never throws
 /// on data it cannot use: ok false and why.
 MuscleRefitResult refitMuscleActivations(const Model& model, const Trajectory& window,
-                                         double relative_ridge, double gain_margin = 10.0);
+                                         double relative_ridge, double gain_margin = 10.0,
+                                         int direct_max_unknowns = 1500);
 
 /// Muscle types refitMuscleActivations would refit in `model`.
 int refittableMuscleTypes(const Model& model);
