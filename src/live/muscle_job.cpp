@@ -101,8 +101,13 @@ std::optional<Model> MuscleJob::fitIfDue(const Model& passive, const Trajectory&
   std::optional<Model> model;
   int muscles = 0;
   double ridge = 1.0;
+  // A live model may leave its rate to the stream (OnlineEstimator takes the window's then): so
+  // does the fit, and the model handed back keeps the passive model's own setting.
+  Model rated = passive;
+  if (!(rated.frame_rate_hz > 0.0)) rated.frame_rate_hz = window.frame_rate_hz;
   try {
-    SensorMuscleResult r = addSensorMuscles(passive, window, o);
+    SensorMuscleResult r = addSensorMuscles(rated, window, o);
+    r.model.frame_rate_hz = passive.frame_rate_hz;
     if (!r.better_than_passive) {
       state = State::kNotKept;
       message = r.not_kept_because;
@@ -158,8 +163,11 @@ std::optional<Model> MuscleJob::refitIfDue(const Model& current, const Trajector
     ridge = ridge_;
   }
   const auto start = std::chrono::steady_clock::now();
-  MuscleRefitResult r = refitMuscleActivations(current, window, ridge, options_.fit.gain_margin);
-  const bool adopted = r.ok && judgeRefit(current, r.model, window);
+  Model rated = current;  // the stream's rate where the model leaves it open (see fitIfDue)
+  if (!(rated.frame_rate_hz > 0.0)) rated.frame_rate_hz = window.frame_rate_hz;
+  MuscleRefitResult r = refitMuscleActivations(rated, window, ridge, options_.fit.gain_margin);
+  const bool adopted = r.ok && judgeRefit(rated, r.model, window);
+  r.model.frame_rate_hz = current.frame_rate_hz;
   std::lock_guard<std::mutex> lock(mutex_);
   ++refits_;
   last_refit_ms_ = 1e3 * secondsSince(start);
