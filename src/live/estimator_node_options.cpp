@@ -16,6 +16,13 @@ void require(bool ok, const std::string& message) {
 
 }  // namespace
 
+MuscleJobOptions defaultMuscleJobOptions() {
+  MuscleJobOptions o;
+  o.fit = liveSensorMuscleOptions();
+  o.refit_period_s = 1.0;
+  return o;
+}
+
 bool parseInputType(const std::string& text, InputType* type) {
   if (text == "markers") {
     *type = InputType::kMarkers;
@@ -93,6 +100,11 @@ void readFilesAndStructure(const ParameterSource& params, EstimatorNodeOptions* 
   params.get("structure_max_time_sec", &o.structure_max_time_s);
   require(o.structure_max_time_s >= 0.0 && std::isfinite(o.structure_max_time_s),
           "~structure_max_time_sec must be >= 0 (0 = no limit)");
+  o.sensor_muscles = o.select_structure;
+  params.get("sensor_muscles", &o.sensor_muscles);
+  params.get("muscle_sensors", &o.muscles.fit.sensors);
+  params.get("muscles_max_time_sec", &o.muscles.fit.max_time_s);
+  params.get("muscle_refit_period_sec", &o.muscles.refit_period_s);
   params.get("prediction_period_sec", &o.prediction_period_sec);
   require(o.prediction_period_sec >= 0.0 && std::isfinite(o.prediction_period_sec),
           "~prediction_period_sec must be >= 0 (0 = off)");
@@ -106,6 +118,13 @@ void readWindow(const ParameterSource& params, EstimatorNodeOptions* options) {
   require(e.window_frames >= 3, "~window_frames must be >= 3");
   require(!o.select_structure || e.window_frames >= 35,
           "~select_structure needs ~window_frames >= 35 (20 frames fitted, 15 held out)");
+  require(!o.sensor_muscles || e.window_frames >= 35,
+          "~sensor_muscles needs ~window_frames >= 35 (the fit holds its last 20 % out)");
+  o.muscles.min_frames = std::max(35, e.window_frames);
+  if (o.sensor_muscles) {
+    const std::string bad = validateOptions(o.muscles);
+    require(bad.empty(), "~" + bad);
+  }
   e.min_frames = std::min(e.min_frames, e.window_frames);
   params.get("min_frames", &e.min_frames);
   require(e.min_frames >= 3 && e.min_frames <= e.window_frames,

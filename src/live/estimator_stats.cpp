@@ -36,6 +36,13 @@ std::string formatStats(const EstimatorStats& s) {
     }
     text += s.prediction->rollout_bounded ? " rollout_bounded=1" : " rollout_bounded=0";
   }
+  if (!s.muscles.empty()) {
+    text += " muscles=" + s.muscles + " muscle_count=" + std::to_string(s.muscle_count) +
+            " muscle_refits=" + std::to_string(s.muscle_refits) +
+            " muscle_refits_adopted=" + std::to_string(s.muscle_refits_adopted);
+    std::snprintf(field, sizeof(field), " muscle_refit_ms=%.3f", s.muscle_refit_ms);
+    text += field;
+  }
   if (!s.structure.empty()) {
     text += " structure_selections=" + std::to_string(s.structure_selections) + " structure=" + s.structure;
     if (s.structure_cut) text += " structure_cut=1";

@@ -19,6 +19,7 @@
 #include "motion_model_estimation/io/path_confinement.h"
 #include "motion_model_estimation/io/trajectory_io.h"
 #include "motion_model_estimation/live/estimator_stats.h"
+#include "motion_model_estimation/live/muscle_refit.h"
 #include "motion_model_estimation/live/replay_pacing.h"
 #include "motion_model_estimation/pipeline/result_metadata.h"
 #include "motion_model_estimation/ros/bag_io.h"
@@ -100,6 +101,15 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
     structure_ = std::make_unique<StructureJob>(model, so, estimator_options.window_frames, !resumed);
     estimator_options.wait_for_structure = true;
   }
+  if (options_.sensor_muscles) {
+    MuscleJobOptions mo = options_.muscles;
+    mo.say = [](const std::string& line) { ROS_INFO("estimator_node: %s", line.c_str()); };
+    // PointCloud2 input carries the particles by position, no names: the anchors would be
+    // points the cloud does not have, so that input gets the layout without them.
+    if (options_.input_type == InputType::kPointCloud && options_.bag.empty()) mo.fit.anchors = false;
+    muscles_ = std::make_unique<MuscleJob>(mo);
+    if (const int present = refittableMuscleTypes(model)) muscles_->startFitted(present);
+  }
   estimator_ = std::make_unique<OnlineEstimator>(model, estimator_options);
   if (!estimator_options.estimate_values)
     ROS_INFO("estimator_node: ~estimate_values is false: the model of %s is shown as it is, its "
@@ -146,11 +156,13 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
 
 EstimatorNode::~EstimatorNode() {
   stop_ = true;
+  if (muscles_) muscles_->cancel();
   markers_cv_.notify_all();
   if (worker_.joinable()) worker_.join();
   if (markers_thread_.joinable()) markers_thread_.join();
   if (bag_thread_.joinable()) bag_thread_.join();
   if (structure_thread_.joinable()) structure_thread_.join();
+  if (muscle_thread_.joinable()) muscle_thread_.join();
 }
 
 void EstimatorNode::reject(const std::string& why) {
@@ -269,6 +281,13 @@ void EstimatorNode::onStatsTimer(const ros::WallTimerEvent&) {
     stats.structure_cut = structure_->lastCut();
     if (structure_->state() == StructureJob::State::kFailed) stats.structure_error = structure_->lastError();
   }
+  if (muscles_) {
+    stats.muscles = muscles_->status();
+    stats.muscle_count = muscles_->muscles();
+    stats.muscle_refits = muscles_->refits();
+    stats.muscle_refits_adopted = muscles_->refitsAdopted();
+    stats.muscle_refit_ms = muscles_->lastRefitMs();
+  }
   std_msgs::String msg;
   msg.data = formatStats(stats);
   stats_pub_.publish(msg);
@@ -313,11 +332,67 @@ void EstimatorNode::structureLoop() {
     try {
       std::lock_guard<std::mutex> lock(input_mutex_);
       estimator_->replaceModel(r->model);  // same particles: the window stays
+      names_.setParticles(estimator_->particleNames());  // a reselection drops muscle anchors
+      ++model_epoch_;
+      if (muscles_) muscles_->forget();
     } catch (const std::exception& e) {
       ROS_ERROR("estimator_node: the chosen structure was refused: %s", e.what());
       continue;
     }
     last_published_generation_ = 0;
+  }
+}
+
+namespace {
+/// Generations of the passive search before the muscles are fitted on its values.
+constexpr uint32_t kMuscleMinGenerations = 20;
+}  // namespace
+
+void EstimatorNode::muscleLoop() {
+  while (!stop_ && ros::ok()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    if (structure_ && structure_->state() != StructureJob::State::kChosen) continue;
+    const Estimate e = estimator_->estimate();
+    if (!e.valid) continue;
+    const uint64_t epoch = model_epoch_;
+    const Model model = estimator_->currentModel();
+    const Trajectory window = estimator_->window();
+    if (window.numMarkers() != static_cast<int>(model.particles.size())) continue;
+    const double now_s = steadyNowS();
+    if (muscles_->state() != MuscleJob::State::kFitted) {
+      if (e.generation < kMuscleMinGenerations) continue;
+      const MuscleJob::State before = muscles_->state();
+      const std::optional<Model> fitted = muscles_->fitIfDue(model, window, now_s);
+      if (fitted) {
+        ROS_INFO("estimator_node: sensor muscles added in %.1f s: %s", muscles_->lastFitS(),
+                 muscles_->lastMessage().c_str());
+        adoptMuscles(*fitted, epoch, "sensor muscles");
+      } else if (muscles_->state() != before &&
+                 (muscles_->state() == MuscleJob::State::kNotKept ||
+                  muscles_->state() == MuscleJob::State::kFailed)) {
+        ROS_WARN("estimator_node: no sensor muscles (%s); tried again on a later window",
+                 muscles_->lastMessage().c_str());
+      }
+      continue;
+    }
+    if (const std::optional<Model> refitted = muscles_->refitIfDue(model, window, now_s))
+      adoptMuscles(*refitted, epoch, "refitted sensor muscles");
+  }
+}
+
+void EstimatorNode::adoptMuscles(const Model& model, uint64_t epoch, const char* what) {
+  std::string why;
+  try {
+    std::lock_guard<std::mutex> lock(input_mutex_);
+    if (epoch != model_epoch_) return;  // a structure or a model came meanwhile
+    why = estimator_->replaceFixedParts(model);
+    if (why.empty()) names_.setParticles(estimator_->particleNames());  // anchors: no marker
+  } catch (const std::exception& ex) {
+    why = ex.what();
+  }
+  if (!why.empty()) {
+    ROS_ERROR("estimator_node: the %s were refused: %s", what, why.c_str());
+    muscles_->forget();
   }
 }
 
@@ -412,7 +487,14 @@ bool EstimatorNode::publishMarkers(const Estimate& e) {
   const std::optional<VisualisationSnapshot> snapshot = makeVisualisationSnapshot(
       estimator_->currentModel(), window, e, options_.color_bonds_by);
   if (!snapshot) return false;
-  markers_pub_.publish(buildMarkers(*snapshot, marker_style_));
+  VisualisationSnapshot scene = *snapshot;
+  if (predictions_) {  // the model against the guesses, 10 frames ahead on the window
+    const std::optional<PredictionReport> report = predictions_->report();
+    const std::string caption =
+        report ? predictionCaption(*report, 10, muscles_ ? muscles_->muscles() : 0) : std::string();
+    if (!caption.empty()) scene.text += "\n" + caption;
+  }
+  markers_pub_.publish(buildMarkers(scene, marker_style_));
   return true;
 }
 
@@ -488,6 +570,8 @@ bool EstimatorNode::onLoad(motion_model_estimation::LoadModel::Request& req,
       const std::vector<std::string> particles = estimator_->particleNames();
       if (particles != particles_before) clock_jumps_.forgetWindow();  // the window was emptied
       names_.setParticles(particles);
+      ++model_epoch_;
+      if (muscles_) muscles_->forget();
     }
     last_published_generation_ = 0;
     res.success = true;
@@ -506,13 +590,16 @@ void EstimatorNode::run() {
   markers_thread_ = std::thread(&EstimatorNode::markersLoop, this);
   if (!options_.bag.empty()) bag_thread_ = std::thread(&EstimatorNode::bagLoop, this);
   if (structure_) structure_thread_ = std::thread(&EstimatorNode::structureLoop, this);
+  if (muscles_) muscle_thread_ = std::thread(&EstimatorNode::muscleLoop, this);
   ros::waitForShutdown();
   stop_ = true;
+  if (muscles_) muscles_->cancel();
   markers_cv_.notify_all();
   worker_.join();
   markers_thread_.join();
   if (bag_thread_.joinable()) bag_thread_.join();
   if (structure_thread_.joinable()) structure_thread_.join();
+  if (muscle_thread_.joinable()) muscle_thread_.join();
   spinner.stop();
 }
 

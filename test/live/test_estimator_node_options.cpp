@@ -112,6 +112,35 @@ TEST(EstimatorNodeOptions, StructureSelectionNeedsALongEnoughWindow) {
   EXPECT_EQ(refusal(s), "");
 }
 
+// ~sensor_muscles: on by default with ~select_structure only, either way on request; its own
+// parameters are checked when it is on.
+TEST(EstimatorNodeOptions, SensorMusclesFollowStructureSelectionAndTheirParametersAreChecked) {
+  MapSource s = withModel();
+  EXPECT_FALSE(mme::readEstimatorNodeOptions(s).sensor_muscles);
+  s.values["select_structure"] = true;
+  mme::EstimatorNodeOptions o = mme::readEstimatorNodeOptions(s);
+  EXPECT_TRUE(o.sensor_muscles);
+  EXPECT_EQ(o.muscles.min_frames, o.estimator.window_frames);
+  EXPECT_EQ(o.muscles.refit_period_s, 1.0);
+  EXPECT_EQ(o.muscles.fit.sensors, 6);
+  EXPECT_EQ(o.muscles.fit.max_time_s, 20.0);
+  s.values["sensor_muscles"] = false;
+  EXPECT_FALSE(mme::readEstimatorNodeOptions(s).sensor_muscles);
+  s = withModel();
+  s.values["sensor_muscles"] = true;  // a passive model given: muscles on request
+  EXPECT_TRUE(mme::readEstimatorNodeOptions(s).sensor_muscles);
+  s.values["window_frames"] = 30;
+  EXPECT_EQ(refusal(s), "~sensor_muscles needs ~window_frames >= 35 (the fit holds its last 20 % out)");
+  const std::pair<const char*, MapSource::Value> bad[] = {
+      {"muscle_sensors", 0}, {"muscles_max_time_sec", -1.0}, {"muscle_refit_period_sec", -0.5}};
+  for (const auto& [name, value] : bad) {
+    MapSource b = withModel();
+    b.values["sensor_muscles"] = true;
+    b.values[name] = value;
+    EXPECT_EQ(refusal(b).rfind(std::string("~") + name, 0), 0u) << refusal(b);
+  }
+}
+
 // ~estimate_values: on by default; off shows the model as it is, which excludes choosing a
 // structure.
 TEST(EstimatorNodeOptions, EstimateValuesOffShowsTheModelAndExcludesStructureSelection) {

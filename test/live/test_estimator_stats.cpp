@@ -69,6 +69,22 @@ TEST(EstimatorStats, PredictionFieldsPerHorizonAndPredictorInMillimetres) {
   EXPECT_NE(mme::formatStats(s).find(" rollout_bounded=1"), std::string::npos);
 }
 
+TEST(EstimatorStats, MuscleFieldsBeforeTheStructureWhenSensorMusclesAreOn) {
+  mme::EstimatorStats s;
+  EXPECT_EQ(mme::formatStats(s).find("muscles="), std::string::npos);
+  s.muscles = "fitted";
+  s.muscle_count = 41;
+  s.muscle_refits = 12;
+  s.muscle_refits_adopted = 9;
+  s.muscle_refit_ms = 35.25;
+  s.structure = "chosen:springs";
+  s.structure_selections = 1;
+  const std::string line = mme::formatStats(s);
+  const std::string fields = " muscles=fitted muscle_count=41 muscle_refits=12 muscle_refits_adopted=9 "
+                             "muscle_refit_ms=35.250 structure_selections=1";
+  EXPECT_NE(line.find(fields), std::string::npos) << line;
+}
+
 TEST(EstimatorStats, StructureStateLastWhenSelectionIsOn) {
   mme::EstimatorStats s;
   EXPECT_EQ(mme::formatStats(s).find("structure="), std::string::npos);

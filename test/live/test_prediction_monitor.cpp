@@ -38,6 +38,18 @@ TEST(PredictionMonitor, EvaluatesWhenDueAndJudgesTheModel) {
   EXPECT_GT(predictionRms(*r, 10, mme::Predictor::kModel), predictionRms(*r, 1, mme::Predictor::kModel));
 }
 
+TEST(PredictionMonitor, TheCaptionSetsTheModelAgainstTheGuesses) {
+  mme::PredictionReport r;
+  r.rows.push_back({10, mme::Predictor::kModel, 7.14e-3, 300});
+  r.rows.push_back({10, mme::Predictor::kConstantVelocity, 12.26e-3, 300});
+  r.rows.push_back({10, mme::Predictor::kConstantAcceleration, 9.81e-3, 300});
+  EXPECT_EQ(mme::predictionCaption(r, 10, 41),
+            "10 frames ahead: model 7.1 mm (41 muscles), constant velocity 12.3, constant "
+            "acceleration 9.8 mm");
+  EXPECT_NE(mme::predictionCaption(r, 10, 0).find("(passive)"), std::string::npos);
+  EXPECT_EQ(mme::predictionCaption(r, 5, 41), "");  // no sample at that horizon
+}
+
 TEST(PredictionMonitor, AWindowTooShortKeepsNoReportAndSaysWhy) {
   const mme::Model truth = mme::test::smallObject();
   const mme::Trajectory window = mme::simulateTrajectory(truth, 30, 100.0);

@@ -13,7 +13,8 @@ set(MME_ESTIMATOR_TEST_NODES
   test_estimator_tracking      # a parameter step followed
   test_estimator_bad_input     # bad frames survived and counted
   test_estimator_structure     # ~select_structure on a bag
-  test_estimator_structure_crash)  # ~select_structure on the real window that crashed it
+  test_estimator_structure_crash  # ~select_structure on the real window that crashed it
+  test_estimator_muscles)  # ~sensor_muscles on a real walk
 foreach(node ${MME_ESTIMATOR_TEST_NODES})
   add_executable(${node} EXCLUDE_FROM_ALL test/ros/${node}.cpp)
   target_link_libraries(${node} mme_ros ${MME_LIBS} ${catkin_LIBRARIES} ${GTEST_LIBRARIES})
@@ -40,7 +41,17 @@ add_custom_command(
           --out "${MME_CRASH_BAG}" --particles-out "${MME_CRASH_MODEL}"
   DEPENDS convert "${CMAKE_CURRENT_SOURCE_DIR}/test/data/crash/window_0_99.trc"
   COMMENT "Converting the structure-selection crash window to a bag")
-add_custom_target(mme_estimator_test_data DEPENDS "${MME_ESTIMATOR_TEST_BAG}" "${MME_CRASH_BAG}")
+# A real walk's particles alone (the node replays the .trc itself).
+set(MME_WALK_TRC "${CMAKE_CURRENT_SOURCE_DIR}/test/data/real/motion_capture_walk.trc")
+set(MME_WALK_MODEL "${MME_ESTIMATOR_TEST_DIR}/motion_capture_walk_particles.yaml")
+add_custom_command(
+  OUTPUT "${MME_WALK_MODEL}"
+  COMMAND ${CMAKE_COMMAND} -E make_directory "${MME_ESTIMATOR_TEST_DIR}"
+  COMMAND convert --trajectory "${MME_WALK_TRC}" --out "${MME_ESTIMATOR_TEST_DIR}/motion_capture_walk.bag"
+          --particles-out "${MME_WALK_MODEL}"
+  DEPENDS convert "${MME_WALK_TRC}"
+  COMMENT "Writing the particles-only model of motion_capture_walk")
+add_custom_target(mme_estimator_test_data DEPENDS "${MME_ESTIMATOR_TEST_BAG}" "${MME_CRASH_BAG}" "${MME_WALK_MODEL}")
 add_dependencies(tests mme_estimator_test_data)
 
 # mme_add_estimator_rostest(NAME [ARGS name:=value ...] [DEPENDENCIES target ...])
@@ -81,3 +92,6 @@ mme_add_estimator_rostest(estimator_structure
 mme_add_estimator_rostest(estimator_structure_crash
   ARGS "bag:=${MME_CRASH_BAG}" "model:=${MME_CRASH_MODEL}"
   DEPENDENCIES test_estimator_structure_crash mme_estimator_test_data)
+mme_add_estimator_rostest(estimator_muscles
+  ARGS "bag:=${MME_WALK_TRC}" "model:=${MME_WALK_MODEL}"
+  DEPENDENCIES test_estimator_muscles mme_estimator_test_data)

@@ -7,10 +7,14 @@
 #include <string>
 
 #include "motion_model_estimation/identification/online/online_estimator.h"
+#include "motion_model_estimation/live/muscle_job.h"
 #include "motion_model_estimation/live/prediction_monitor.h"
 #include "motion_model_estimation/live/visualisation_snapshot.h"
 
 namespace mme {
+
+/// The node's muscle job defaults (liveSensorMuscleOptions, a refit every second).
+MuscleJobOptions defaultMuscleJobOptions();
 
 /// What arrives on `markers` (~input_type).
 enum class InputType {
@@ -45,6 +49,13 @@ struct EstimatorNodeOptions {
   /// [s] wall time of one structure selection (0 = no limit): a cut selection chooses the best
   /// level judged so far (StructureOptions::max_wall_time_s).
   double structure_max_time_s = 120.0;
+  /// Add sensor muscles to the estimated passive model in the background and keep their linear
+  /// part refitted on the window (muscle_job.h). Default: on with select_structure, else off.
+  bool sensor_muscles = false;
+  /// The muscle job: its fit's sensors (~muscle_sensors) and time limit
+  /// (~muscles_max_time_sec), the refit period (~muscle_refit_period_sec); min_frames follows
+  /// ~window_frames.
+  MuscleJobOptions muscles = defaultMuscleJobOptions();
   OnlineEstimatorOptions estimator;
 };
 

@@ -22,6 +22,10 @@ struct EstimatorStats {
   UpdateGapSummary updates;  ///< estimate updates and the gaps between them
   LatencySummary latency;    ///< arrival -> ~markers of drawn frames
   std::optional<PredictionReport> prediction;  ///< the model's predictions on the window
+  std::string muscles;       ///< ~sensor_muscles' state (MuscleJob::status), "" = off
+  int muscle_count = 0;      ///< muscles of the estimated model (0: none yet)
+  uint32_t muscle_refits = 0, muscle_refits_adopted = 0;  ///< refits tried / adopted
+  double muscle_refit_ms = 0.0;  ///< the last refit's wall time [ms]
   std::string structure;     ///< ~select_structure's state (StructureJob::status), "" = off
   uint32_t structure_selections = 0;  ///< ... and the selections that chose a model
   bool structure_cut = false;  ///< the last selection was cut by its time limit
@@ -35,7 +39,9 @@ struct EstimatorStats {
 /// then, once a prediction report exists, per horizon K and predictor P (its CSV name: model,
 /// constant_velocity, constant_acceleration, gravity_only) "predict<K>_<P>_mm=X" (RMS per
 /// coordinate [mm], 3 decimals; horizons without a sample are left out) and
-/// "rollout_bounded=0|1"; with ~select_structure, "structure_selections=N" (selections that
+/// "rollout_bounded=0|1"; with ~sensor_muscles "muscles=waiting|fitting|fitted|not_kept|failed
+/// muscle_count=N muscle_refits=N muscle_refits_adopted=N muscle_refit_ms=X"; with
+/// ~select_structure, "structure_selections=N" (selections that
 /// chose a model) and "structure=idle|pending|running|chosen:<level>|failed", then
 /// "structure_cut=1" when the time limit cut the last selection, and last, when it failed,
 /// "structure_error=<why>" (the rest of the line: the reason has spaces).

@@ -16,6 +16,11 @@
 
 namespace mme {
 
+/// The rviz caption's line on the model against the guesses `horizon` frames ahead, e.g.
+/// "10 frames ahead: model 7.1 mm (41 muscles), constant velocity 12.3, constant acceleration
+/// 9.8 mm" (`muscles` 0: "(passive)"); "" when the report has no sample at that horizon.
+std::string predictionCaption(const PredictionReport& report, int horizon, int muscles);
+
 class PredictionMonitor {
  public:
   static constexpr double kDefaultPeriodS = 5.0;

@@ -29,6 +29,7 @@
 #include "motion_model_estimation/live/estimator_node_options.h"
 #include "motion_model_estimation/live/latency_stats.h"
 #include "motion_model_estimation/live/marker_name_map.h"
+#include "motion_model_estimation/live/muscle_job.h"
 #include "motion_model_estimation/live/prediction_monitor.h"
 #include "motion_model_estimation/live/structure_job.h"
 #include "motion_model_estimation/live/update_gap_stats.h"
@@ -64,6 +65,12 @@ class EstimatorNode {
   /// ~select_structure: chooses the structure when requested and the window is full, then
   /// hands the model to the estimator and writes the report.
   void structureLoop();
+  /// ~sensor_muscles: once the passive model is estimated (and its structure chosen), adds
+  /// sensor muscles on the window, then refits their linear part each period; each model is
+  /// handed to the estimator without stopping its search (replaceFixedParts).
+  void muscleLoop();
+  /// Hands a model with muscles to the estimator unless the model changed since `epoch`.
+  void adoptMuscles(const Model& model, uint64_t epoch, const char* what);
   void bagLoop();
   void onPublishTimer(const ros::WallTimerEvent&);
   /// ~markers thread: rebuilds the rviz markers as soon as a frame is accepted (latest frame
@@ -92,7 +99,11 @@ class EstimatorNode {
   ros::ServiceServer reset_srv_, export_srv_, load_srv_;
   ros::WallTimer publish_timer_, autosave_timer_, stats_timer_;
   std::string autosave_target_;  // confined absolute path, "" = off
-  std::thread worker_, bag_thread_, markers_thread_, structure_thread_;
+  std::thread worker_, bag_thread_, markers_thread_, structure_thread_, muscle_thread_;
+  std::unique_ptr<MuscleJob> muscles_;  // null unless ~sensor_muscles
+  /// Bumped (under input_mutex_) when a chosen structure or ~load_model replaces the model: a
+  /// muscle fit begun before belongs to the old one.
+  std::atomic<uint64_t> model_epoch_{0};
   std::unique_ptr<StructureJob> structure_;  // null unless ~select_structure
   std::string structure_report_target_;      // confined absolute path
   // Marker thread hand-off (markersLoop): the newest accepted frame's arrival and a counter.
