@@ -21,14 +21,21 @@ void warn(const PipelineOptions& options, const std::string& line) {
   if (options.warn) options.warn(line);
 }
 
-/// One line on a sensor-muscle fit: what was chosen, how it predicts, whether it is kept.
+/// One line on a sensor-muscle fit: what was chosen, its size against the samples it was fitted
+/// on, how it predicts, whether it is kept; or why the search did not run.
 std::string sensorMuscleSummary(const SensorMuscleResult& sm, const SensorMuscleOptions& options) {
-  char line[640];
+  char line[800];
+  if (sm.skipped || sm.chosen < 0) {
+    std::snprintf(line, sizeof(line), "sensor muscles: %s (%.1f s)", sm.not_kept_because.c_str(),
+                  sm.wall_time_s);
+    return line;
+  }
   std::snprintf(line, sizeof(line),
-                "sensor muscles: %d sensors, %d muscles, ridge %.0e, %d rollout round(s), "
-                "activation time constant %.3g s, %s anchors; %d frames ahead on the last frames "
-                "%.3g m (passive %.3g m, constant velocity %.3g m), %.0f s%s%s%s",
-                sm.sensors, sm.muscles, sm.ridge, sm.candidates[sm.chosen].rollout_rounds,
+                "sensor muscles: %d sensors, %d muscles, ridge %.0e, %zu parameters on %zu samples, "
+                "%d rollout round(s), activation time constant %.3g s, %s anchors; %d frames ahead on "
+                "the last frames %.3g m (passive %.3g m, constant velocity %.3g m), %.0f s%s%s%s",
+                sm.sensors, sm.muscles, sm.ridge, sm.unknowns, sm.rows,
+                sm.candidates[sm.chosen].rollout_rounds,
                 sm.activation_time_s, sm.anchors ? "with" : "without", options.horizon_frames,
                 sm.validation_rms_m, sm.passive_rms_m, sm.constant_velocity_rms_m, sm.wall_time_s,
                 sm.stopped_by_time ? " (stopped by --muscles-max-time-s: fewer candidates judged)" : "",
@@ -99,7 +106,7 @@ void fitSensorMuscleStep(const Trajectory& trajectory, const PipelineOptions& op
   result->notes.push_back(result->sensor_muscle_summary);
   if (sm.better_than_passive)
     result->model = sm.model;
-  else
+  else if (!sm.skipped)
     warn(options, "the sensor muscles are not kept (" + sm.not_kept_because +
                       "): the passive model is written");
 }

@@ -93,8 +93,13 @@ void parseSensorMuscleOptions(const mme::CliArgs& args, Command* c) {
                                     args.has("muscle-anchors") || args.has("anchor-stiffness");
   const bool on_by_default = muscle_options_given;
   mme::SensorMuscleOptions options;
-  options.sensors = static_cast<int>(
-      args.getInt("sensor-muscles", on_by_default ? options.sensors : 0, 0, mme::kMaxMuscleInputs));
+  // auto: the default sensors, the search started only where the gain gate finds something to
+  // gain (SensorMuscleOptions::skip_without_gain); a number forces the search with that many.
+  const bool automatic = args.get("sensor-muscles", "") == "auto";
+  options.skip_without_gain = automatic;
+  if (!automatic)
+    options.sensors = static_cast<int>(
+        args.getInt("sensor-muscles", on_by_default ? options.sensors : 0, 0, mme::kMaxMuscleInputs));
   if (options.sensors == 0) {
     if (muscle_options_given)
       throw mme::InputError("--muscle-neighbours, --rollout-rounds, --muscle-anchors and --anchor-stiffness need sensor "
@@ -332,6 +337,7 @@ std::string whyPassive(const mme::PipelineResult& result, const Command& c) {
   if (result.cancelled) return "interrupted before the sensor muscles";
   if (c.pipeline.sensor_muscles) {
     if (!result.sensor_muscles) return "sensor muscles failed on these data (see the warning above)";
+    if (result.sensor_muscles->skipped) return "sensor muscles " + result.sensor_muscles->not_kept_because;
     return "sensor muscles not kept (" + result.sensor_muscles->not_kept_because + ")";
   }
   std::string why = "sensor muscles not tried (off by default; --sensor-muscles 16 fits them)";

@@ -172,3 +172,17 @@ grep -q "sensor muscles: none (sensor muscles: 40 frames are too few" "$tmp/shor
   { echo "the written model's notes do not say why it has no sensor muscles"; exit 1; }
 
 echo "muscle: documented example simulated, identified, exported and reloaded; bad definitions refused; muscles placed on a passive fit lower its cost; sensor muscles predict its held-out frames better"
+# --sensor-muscles auto: the search is not started where the passive model already explains the
+# data (here its own simulation, noiseless): the closing line and the file's notes say why, and
+# the passive model is written. On the muscle's data the gate lets the search through.
+"$bin/simulate" --model "$tmp/passive_fit.yaml" --frames 100 --out "$tmp/passive_data.trc" >/dev/null
+"$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/passive_data.trc" --out "$tmp/gate.yaml" \
+  --cost short_term --generations 5 --sensor-muscles auto >"$tmp/gate.log" 2>&1
+grep -q "^identify: sensor muscles: not fitted: the passive model predicts the validation frames" "$tmp/gate.log" ||
+  { echo "--sensor-muscles auto on passive data:"; grep sensor "$tmp/gate.log"; exit 1; }
+grep -q "sensor muscles: not fitted: " "$tmp/gate.yaml" || { echo "no note in the file"; exit 1; }
+! grep -q "kind: muscle" "$tmp/gate.yaml"
+"$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/gate_on.yaml" \
+  --cost short_term --sensor-muscles auto --muscle-anchors 0 >"$tmp/gate_on.log" 2>&1
+grep -q "^identify: sensor muscles: 16 sensors\|^identify: sensor muscles: [0-9]* sensors, [0-9]* muscles, ridge .*, [0-9]* parameters on [0-9]* samples" \
+  "$tmp/gate_on.log" || { echo "--sensor-muscles auto on the muscle's data:"; grep sensor "$tmp/gate_on.log"; exit 1; }

@@ -43,6 +43,19 @@ SignConstraints MuscleEquations::signConstraints(bool nonnegative_own_spring) co
   c.nonnegative_own_spring = nonnegative_own_spring;
   for (int m = 0; m < m_; ++m)
     if (layout_.no_own_stiffness[m]) c.held_at_zero.push_back(m * k_ + 2 * s_ + 1);
+  // The blocks a particle's equations fill (addEquation): every pair of its muscles.
+  c.coupled_below.assign(m_, {});
+  for (int i = 0; i < n_; ++i) {
+    if (passive_.particles[i].fixed) continue;
+    for (const auto& [m, sign] : at_[i])
+      for (const auto& [m2, sign2] : at_[i])
+        if (m2 <= m) c.coupled_below[m].push_back(m2);
+  }
+  for (std::vector<int>& below : c.coupled_below) {
+    std::sort(below.begin(), below.end());
+    below.erase(std::unique(below.begin(), below.end()), below.end());
+  }
+  c.cache = makeSparseRidgeCache();
   return c;
 }
 

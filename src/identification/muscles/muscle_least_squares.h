@@ -1,8 +1,13 @@
 // The sensor muscles' least-squares fit: ridge-regularised normal equations in scaled columns,
 // solved by Cholesky with every muscle's own stiffness and damping held >= 0 (an active set).
+// A particle's equations touch only the muscles at it, so the normal matrix is sparse in blocks
+// of one muscle's unknowns: it is factorised as a sparse matrix whose fill-reducing ordering and
+// symbolic factorisation are made once per layout and reused by every ridge, clamp round and
+// rollout round (their rows touch the same blocks).
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -26,6 +31,10 @@ double meanDiagonal(const System& sys);
 /// RMS of a system's rows at theta [m/s^2].
 double residualRms(const System& sys, const Eigen::VectorXd& theta);
 
+/// The sparse factorisation's reusable part (muscle_least_squares.cpp).
+struct SparseRidgeCache;
+std::shared_ptr<SparseRidgeCache> makeSparseRidgeCache();
+
 /// Where each muscle's unknowns sit and which the solve constrains.
 struct SignConstraints {
   int muscles = 0;
@@ -33,6 +42,13 @@ struct SignConstraints {
   int own_stiffness = 0;      ///< a muscle's stiffness column within its block; damping follows
   bool nonnegative_own_spring = true;   ///< stiffness and damping >= 0
   std::vector<int> held_at_zero;        ///< columns always 0 (stiffness of muscles without one)
+  /// Per muscle m, the muscles m2 <= m whose unknowns meet m's in an equation (both at a
+  /// particle that gives equations): the normal matrix's nonzero blocks on and below the
+  /// diagonal. Empty: the normal matrix is solved as a dense one.
+  std::vector<std::vector<int>> coupled_below;
+  /// The sparse factorisation's ordering and symbolic part, made by the first solve and shared
+  /// by copies of these constraints (one layout, one pattern).
+  std::shared_ptr<SparseRidgeCache> cache;
 };
 
 /// theta for a relative ridge under `constraints`; false when a solve fails. The signs by an

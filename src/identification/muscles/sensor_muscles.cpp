@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "fit_budget.h"
+#include "gain_gate.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/muscle.h"
 #include "sensor_anchors.h"
@@ -158,6 +159,19 @@ SensorMuscleResult fitBothLayouts(const Model& passive, const Trajectory& data, 
   return withoutAnchorsBetter(*with, *without, o) ? std::move(*without) : std::move(*with);
 }
 
+/// The result of a search the gate skipped: the passive model, the reason, what was measured.
+SensorMuscleResult skippedResult(const Model& passive, const sensor_muscles::GainVerdict& v) {
+  SensorMuscleResult r;
+  r.model = passive;
+  r.skipped = true;
+  r.not_kept_because = "not fitted: " + v.why_not;
+  r.validation_rms_m = v.passive_rms_m;
+  r.passive_rms_m = v.passive_rms_m;
+  r.constant_velocity_rms_m = v.constant_velocity_rms_m;
+  r.noise_m = v.noise_m;
+  return r;
+}
+
 }  // namespace
 
 SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data,
@@ -169,8 +183,21 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
     r.stopped_by_time = budget.stopped();
     return r;
   };
+  double noise_m = 0.0;
+  if (o.skip_without_gain) {
+    const sensor_muscles::GainVerdict verdict = sensor_muscles::judgeGain(passive, data, o);
+    noise_m = verdict.noise_m;
+    if (!verdict.worth_fitting) {
+      say(o, "sensor muscles: " + skippedResult(passive, verdict).not_kept_because);
+      return timed(skippedResult(passive, verdict));
+    }
+  }
+  const auto noted = [&](SensorMuscleResult r) {
+    r.noise_m = noise_m;
+    return r;
+  };
   const size_t n = passive.particles.size();
-  if (!o.anchors) return timed(fitSensorMuscles(passive, data, std::vector<char>(n, 0), o, budget));
+  if (!o.anchors) return noted(timed(fitSensorMuscles(passive, data, std::vector<char>(n, 0), o, budget)));
   // The anchor muscles' own stiffness: kAuto decided here, once for both layouts.
   const double travel = bodyTravel(passive, data);
   const SensorMuscleOptions resolved = sensor_muscles::resolveAnchorStiffness(passive, travel, o);
@@ -178,7 +205,7 @@ SensorMuscleResult addSensorMuscles(const Model& passive, const Trajectory& data
   const auto tagged = [&](SensorMuscleResult r) {
     r.anchor_stiffness = r.anchors && anchor_stiffness;
     r.body_travel = travel;
-    return timed(std::move(r));
+    return noted(timed(std::move(r)));
   };
   Model anchored = passive;
   Trajectory anchored_data = data;

@@ -127,11 +127,13 @@ TEST(SensorMuscles, LearnTheControllerThePassiveModelLacks) {
 }
 
 TEST(SensorMuscles, StaySilentWhereNoControllerActed) {
-  // Data of the passive model itself: the muscles have nothing to explain, and predict as it.
+  // Data of the passive model itself: the muscles have nothing to explain, and predict as it
+  // (the search forced: the gain gate would not start it).
   const Model passive = mme::removeMuscles(mme::test::muscleObject());
   const mme::Trajectory data = mme::simulateTrajectory(passive, kFrames, passive.frame_rate_hz);
-  const mme::SensorMuscleResult r =
-      mme::addSensorMuscles(passive, mme::sliceFrames(data, 0, kFitted), smallOptions());
+  mme::SensorMuscleOptions forced = smallOptions();
+  forced.skip_without_gain = false;
+  const mme::SensorMuscleResult r = mme::addSensorMuscles(passive, mme::sliceFrames(data, 0, kFitted), forced);
   EXPECT_LT(r.residual_rms_m, 1e-9);
   // Nothing to gain: not kept, and the reason says so.
   EXPECT_FALSE(r.better_than_passive);
@@ -139,6 +141,47 @@ TEST(SensorMuscles, StaySilentWhereNoControllerActed) {
       << r.not_kept_because;
   EXPECT_LT(heldOutRms(r.model, data), 1e-6);
   EXPECT_LT(heldOutRms(passive, data), 1e-9);
+}
+
+TEST(SensorMuscles, TheSearchDoesNotRunWhereThePassiveModelPredictsAtTheNoise) {
+  // The passive model's own data, noiseless: it predicts the validation frames at round-off, so
+  // the search is not started and the result says why; with the same data and marker noise its
+  // one-step residual is the noise, and again nothing is fitted.
+  const Model passive = mme::removeMuscles(mme::test::muscleObject());
+  const mme::Trajectory data = mme::sliceFrames(mme::simulateTrajectory(passive, kFrames, passive.frame_rate_hz),
+                                                0, kFitted);
+  const mme::SensorMuscleResult r = mme::addSensorMuscles(passive, data, smallOptions());
+  EXPECT_TRUE(r.skipped);
+  EXPECT_FALSE(r.better_than_passive);
+  EXPECT_TRUE(r.candidates.empty());
+  EXPECT_EQ(r.unknowns, 0u);
+  EXPECT_EQ(mme::modelToYaml(r.model), mme::modelToYaml(passive));
+  EXPECT_NE(r.not_kept_because.find("within the"), std::string::npos) << r.not_kept_because;
+  EXPECT_LT(r.passive_rms_m, 1e-9);
+
+  mme::Trajectory noisy = data;
+  mme::addGaussianNoise(&noisy, 2e-4, 7);
+  const mme::SensorMuscleResult n = mme::addSensorMuscles(passive, noisy, smallOptions());
+  EXPECT_TRUE(n.skipped);
+  EXPECT_TRUE(n.candidates.empty());
+  EXPECT_GT(n.noise_m, 1e-4);
+  EXPECT_LT(n.noise_m, 4e-4);
+  EXPECT_NE(n.not_kept_because.find("noise"), std::string::npos) << n.not_kept_because;
+}
+
+TEST(SensorMuscles, TheGateLetsASceneWithAControllerThrough) {
+  // Where a controller acted, its forces are far above the noise: the search runs and keeps
+  // the muscles, the gate's noise estimate reported beside them.
+  const LinearControllerCase c;
+  mme::Trajectory noisy = mme::sliceFrames(c.data, 0, kFitted);
+  mme::addGaussianNoise(&noisy, 1e-5, 3);
+  const mme::SensorMuscleResult r = mme::addSensorMuscles(c.passive, noisy, smallOptions());
+  EXPECT_FALSE(r.skipped);
+  EXPECT_FALSE(r.candidates.empty());
+  EXPECT_TRUE(r.better_than_passive) << r.not_kept_because;
+  EXPECT_GT(r.noise_m, 0.0);
+  EXPECT_GT(r.unknowns, 0u);
+  EXPECT_GT(r.rows, r.unknowns);
 }
 
 /// Each muscle's own stiffness and damping in `model`: how many are negative.

@@ -86,6 +86,11 @@ struct SensorMuscleOptions {
   /// under way and the refits, and its result then depends on the machine's load
   /// (SensorMuscleResult::stopped_by_time says when the limit cut the search).
   double max_time_s = 0.0;
+  /// Skip the search where it cannot gain: the passive model already predicts the validation
+  /// frames within what a perfect model makes from starts with the markers' noise, or its
+  /// one-step residual (what the muscles fit) is only the markers' noise. The result then has
+  /// `skipped` set, the passive model and the reason (not_kept_because).
+  bool skip_without_gain = true;
   std::function<void(const std::string&)> progress;  ///< one line per step (may be empty)
 };
 
@@ -133,6 +138,10 @@ struct SensorMuscleResult {
   /// among fewer candidates, or a layout was not fitted).
   bool stopped_by_time = false;
   double wall_time_s = 0.0;  ///< the fit's wall time [s]
+  /// SensorMuscleOptions::skip_without_gain found nothing to gain: no muscle was placed, `model`
+  /// is the passive model and not_kept_because says why.
+  bool skipped = false;
+  double noise_m = 0.0;  ///< the markers' estimated noise per coordinate (estimateMarkerNoise) [m]
 };
 
 /// How far the body travels over the data, in body sizes: the median over the free particles of
