@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "usage: bench_paper [--quick] [--out-dir DIR] [--threads T] "
                              "[--only fig1,table1,table2,scaling,random18,defaults,accuracy,\n"
                              "        online,structure,structure_real,fig5,stages,walker_oe,\n"
-                             "        walker_identify,oe_speed]\n"
+                             "        walker_identify,oe_speed,oe_speed_small]\n"
                              "       [--generations N] [--refine-start G] [--refine-period G]\n"
                              "       [--refine-evaluations E] [--refine ALGORITHM] [--seed S]\n"
                              "       [--fig5-cases walker,Sample01_Eb015pi.c3d,...] (default: all)\n"
@@ -101,7 +101,8 @@ int main(int argc, char** argv) {
     if (!s.only.empty() && s.wants("stages")) stagesExperiment(s);  // opt-in only
     if (!s.only.empty() && s.wants("walker_oe")) walkerOutputError(s);  // opt-in only
     if (!s.only.empty() && s.wants("walker_identify")) walkerIdentify(s);  // opt-in only
-    if (!s.only.empty() && s.wants("oe_speed")) outputErrorSpeed(s);  // opt-in only
+    if (!s.only.empty() && (s.wants("oe_speed") || s.wants("oe_speed_small")))
+      outputErrorSpeed(s);  // opt-in only
     if (s.wants("table1")) table1(s);
     if (s.wants("fig1")) figure1(s);
     if (s.wants("table2")) table2(s);

@@ -76,6 +76,66 @@ const std::vector<std::pair<const char*, mme::OutputErrorLinearSolver>>& solvers
   return kSolvers;
 }
 
+/// One random object's fits (see outputErrorSpeed); `probes`: first the time of an iteration of
+/// every pair, the whole fit with exact Jacobians then taking the fastest solver.
+void randomObjectFits(const Settings& s, std::FILE* f, const char* name, const mme::RandomObjectSpec& spec,
+                      int probe_iterations, bool probes) {
+  const Model truth = mme::makeRandomObject(spec);
+  const int frames = s.quick ? 120 : 240;
+  const double noise_m = 1e-4;
+  const mme::Trajectory clean = mme::simulateTrajectory(truth, frames, truth.frame_rate_hz);
+  Case c;
+  c.name = name;
+  c.data = clean;
+  mme::addGaussianNoise(&c.data, noise_m, 41);
+  c.truth = mme::getValues(truth, mme::freeParameters(truth));
+  c.search = forgetFreeValues(truth);
+  const mme::ParameterSpace space(c.search, c.data);
+  c.space = &space;
+  c.start = space.toSearch(c.truth);
+  for (size_t k = 0; k < c.start.size(); ++k) c.start[k] = space.reflect(k, c.start[k] + (k % 2 ? 0.02 : -0.02));
+  // The time of an iteration: every pair, a few iterations per continuity stage.
+  std::pair<const char*, mme::OutputErrorLinearSolver> fastest = solvers().front();
+  double fastest_s = INFINITY;
+  for (const auto& solver : solvers()) {
+    if (!probes) break;
+    mme::OutputErrorOptions o;
+    o.linear_solver = solver.second;
+    o.max_iterations = probe_iterations;
+    o.estimate_std = false;
+    const mme::OutputErrorResult r = fitCase(s, f, c, solver.first, o);
+    const double per_iteration = r.wall_time_s / std::max(1, r.iterations);
+    if (per_iteration < fastest_s) {
+      fastest_s = per_iteration;
+      fastest = solver;
+    }
+  }
+  if (probes) {
+    mme::OutputErrorOptions o;
+    o.jacobian = mme::OutputErrorJacobian::kFiniteDifferences;
+    o.max_iterations = probe_iterations;
+    o.estimate_std = false;
+    fitCase(s, f, c, solvers().front().first, o);
+  }
+  const mme::ParameterSpace truth_space(truth, clean);
+  const auto bound_began = std::chrono::steady_clock::now();
+  const std::vector<double> bound = mme::cramerRaoBound(truth, clean, truth_space, noise_m);
+  const double bound_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - bound_began).count();
+  std::vector<double> bound_rel;
+  for (size_t k = 0; k < bound.size(); ++k) bound_rel.push_back(100.0 * bound[k] / std::abs(c.truth[k]));
+  c.bound_median_percent = medianOf(bound_rel);
+  std::printf("oe_speed: %s: %zu unknowns, %d frames, Cramer-Rao bound median %.4g %% (%.1f s)\n",
+              name, c.truth.size(), frames, c.bound_median_percent, bound_s);
+  mme::OutputErrorOptions exact;
+  exact.linear_solver = fastest.second;
+  const double exact_s = fitCase(s, f, c, fastest.first, exact).wall_time_s;
+  mme::OutputErrorOptions today;
+  today.jacobian = mme::OutputErrorJacobian::kFiniteDifferences;
+  today.linear_solver = mme::OutputErrorLinearSolver::kSparseNormalCholesky;
+  const double today_s = fitCase(s, f, c, solvers().front().first, today).wall_time_s;
+  std::printf("oe_speed: %s: today's fit / exact with %s = %.2f\n", name, fastest.first, today_s / exact_s);
+}
+
 }  // namespace
 
 /// Two cases:
@@ -88,13 +148,16 @@ const std::vector<std::pair<const char*, mme::OutputErrorLinearSolver>>& solvers
 /// - walk39: motion_capture_walk (238 frames) with markerModel's 39 damped springs and a
 ///   free gravity (120 unknowns, the size its structure selection leaves), from the search
 ///   space's initial centres, a few iterations each way: the time per iteration.
+/// `--only oe_speed_small` instead: random18's object with damped types (18 markers, 12 types,
+/// 36 unknowns), the whole fits both ways and its bound (minutes, where random43's take hours on
+/// a loaded machine).
 void outputErrorSpeed(const Settings& s) {
   std::FILE* f = openCsv(s.out_dir + "/oe_speed.csv",
                          "case,jacobian,linear_solver,unknowns,frames,max_iterations,wall_s,jacobian_s,"
                          "linear_solver_s,iterations,s_per_iteration,converged,median_error_percent,"
                          "bound_median_percent,error_over_bound");
   const int probe_iterations = s.quick ? 2 : 4;
-  {
+  if (!s.wants("oe_speed_small")) {
     const std::string path = std::string(MME_TEST_DATA_DIR) + "/real/motion_capture_walk.trc";
     Case c;
     c.name = "walk39";
@@ -116,65 +179,18 @@ void outputErrorSpeed(const Settings& s) {
     o.estimate_std = false;
     fitCase(s, f, c, solvers().front().first, o);
   }
-  {
+  if (!s.wants("oe_speed_small")) {
     mme::RandomObjectSpec spec;  // as bench_paper's online experiment and the soak's big model
     spec.particles = 43;
     spec.bond_types = 91;
     spec.bonds = 91;
     spec.damping_max_nspm = 0.05;
-    const Model truth = mme::makeRandomObject(spec);
-    const int frames = s.quick ? 120 : 240;
-    const double noise_m = 1e-4;
-    const mme::Trajectory clean = mme::simulateTrajectory(truth, frames, truth.frame_rate_hz);
-    Case c;
-    c.name = "random43";
-    c.data = clean;
-    mme::addGaussianNoise(&c.data, noise_m, 41);
-    c.truth = mme::getValues(truth, mme::freeParameters(truth));
-    c.search = forgetFreeValues(truth);
-    const mme::ParameterSpace space(c.search, c.data);
-    c.space = &space;
-    c.start = space.toSearch(c.truth);
-    for (size_t k = 0; k < c.start.size(); ++k) c.start[k] = space.reflect(k, c.start[k] + (k % 2 ? 0.02 : -0.02));
-    // The time of an iteration: every pair, a few iterations per continuity stage.
-    std::pair<const char*, mme::OutputErrorLinearSolver> fastest = solvers().front();
-    double fastest_s = INFINITY;
-    for (const auto& solver : solvers()) {
-      mme::OutputErrorOptions o;
-      o.linear_solver = solver.second;
-      o.max_iterations = probe_iterations;
-      o.estimate_std = false;
-      const mme::OutputErrorResult r = fitCase(s, f, c, solver.first, o);
-      const double per_iteration = r.wall_time_s / std::max(1, r.iterations);
-      if (per_iteration < fastest_s) {
-        fastest_s = per_iteration;
-        fastest = solver;
-      }
-    }
-    {
-      mme::OutputErrorOptions o;
-      o.jacobian = mme::OutputErrorJacobian::kFiniteDifferences;
-      o.max_iterations = probe_iterations;
-      o.estimate_std = false;
-      fitCase(s, f, c, solvers().front().first, o);
-    }
-    const mme::ParameterSpace truth_space(truth, clean);
-    const auto bound_began = std::chrono::steady_clock::now();
-    const std::vector<double> bound = mme::cramerRaoBound(truth, clean, truth_space, noise_m);
-    const double bound_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - bound_began).count();
-    std::vector<double> bound_rel;
-    for (size_t k = 0; k < bound.size(); ++k) bound_rel.push_back(100.0 * bound[k] / std::abs(c.truth[k]));
-    c.bound_median_percent = medianOf(bound_rel);
-    std::printf("oe_speed: random43: %zu unknowns, %d frames, Cramer-Rao bound median %.4g %% (%.1f s)\n",
-                c.truth.size(), frames, c.bound_median_percent, bound_s);
-    mme::OutputErrorOptions exact;
-    exact.linear_solver = fastest.second;
-    const double exact_s = fitCase(s, f, c, fastest.first, exact).wall_time_s;
-    mme::OutputErrorOptions today;
-    today.jacobian = mme::OutputErrorJacobian::kFiniteDifferences;
-    today.linear_solver = mme::OutputErrorLinearSolver::kSparseNormalCholesky;
-    const double today_s = fitCase(s, f, c, solvers().front().first, today).wall_time_s;
-    std::printf("oe_speed: random43: today's fit / exact with %s = %.2f\n", fastest.first, today_s / exact_s);
+    randomObjectFits(s, f, "random43", spec, probe_iterations, true);
+  }
+  if (s.wants("oe_speed_small")) {
+    mme::RandomObjectSpec spec;  // random18's object with damped types
+    spec.damping_max_nspm = 0.05;
+    randomObjectFits(s, f, "random18", spec, probe_iterations, false);
   }
   std::fclose(f);
 }

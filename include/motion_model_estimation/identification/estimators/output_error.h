@@ -35,11 +35,13 @@ enum class OutputErrorJacobian {
   kFiniteDifferences,
 };
 
-/// The linear solver of the output error's Gauss-Newton steps (Ceres' names).
+/// The linear solver of the output error's Gauss-Newton steps (Ceres' names). The Schur ones
+/// eliminate an independent set of segment states first (every other one: a continuity block
+/// joins two neighbours), Ceres' automatic ordering.
 enum class OutputErrorLinearSolver {
   kSparseNormalCholesky,  ///< J^T J of the whole problem, sparse Cholesky
-  kSparseSchur,           ///< every other segment state eliminated first, sparse Cholesky of the rest
-  kIterativeSchur,        ///< the same elimination, conjugate gradients (Schur-Jacobi preconditioner)
+  kSparseSchur,           ///< the eliminated states' Schur complement, sparse Cholesky
+  kIterativeSchur,        ///< the same, conjugate gradients (Schur-Jacobi preconditioner)
 };
 
 struct OutputErrorOptions {
@@ -75,6 +77,8 @@ struct OutputErrorOptions {
   double max_time_s = 0.0;          ///< 0 = no limit
   int threads = 1;                  ///< Ceres' threads evaluating segments
   OutputErrorJacobian jacobian = OutputErrorJacobian::kExact;
+  /// The Gauss-Newton steps' linear solver; the choice of the default is measured by
+  /// `bench_paper --only oe_speed` (docs/estimators.md, "The output error's time").
   OutputErrorLinearSolver linear_solver = OutputErrorLinearSolver::kSparseNormalCholesky;
   bool estimate_std = true;         ///< 1-sigma std per parameter from the Jacobian at the optimum
   /// The std from noise_std_m as given (the Cramer-Rao bound) rather than from the residuals.
