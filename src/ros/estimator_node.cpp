@@ -104,9 +104,6 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
   if (options_.sensor_muscles) {
     MuscleJobOptions mo = options_.muscles;
     mo.say = [](const std::string& line) { ROS_INFO("estimator_node: %s", line.c_str()); };
-    // PointCloud2 input carries the particles by position, no names: the anchors would be
-    // points the cloud does not have, so that input gets the layout without them.
-    if (options_.input_type == InputType::kPointCloud && options_.bag.empty()) mo.fit.anchors = false;
     if (refittableMuscleTypes(model) > 0)
       ROS_WARN("estimator_node: ~sensor_muscles: the model has muscles already; none are added");
     else
