@@ -28,7 +28,7 @@ struct MuscleJobOptions {
   int min_frames = 50;           ///< window frames the first fit waits for [frames]
   double refit_period_s = 1.0;   ///< [s] between refits of the linear part (0: never refit)
   /// [s] a fit that was not kept or failed is tried again on a later window after this long.
-  double retry_after_s = 20.0;
+  double retry_after_s = 10.0;
   int horizon_frames = 10;       ///< the refit's judge: open-loop error this many frames ahead
   std::function<void(const std::string&)> say;  ///< one line per event (may be empty)
 };
