@@ -38,6 +38,28 @@ bool keepPassiveFree(const Model& passive, Model* fitted) {
   return true;
 }
 
+/// `muscles` (a passive model with sensor muscles appended) with `passive`'s free values; false
+/// when `passive` is not the model they were laid on (its types and particles not a prefix of
+/// theirs, or other free parameters).
+bool layOn(const Model& passive, Model* muscles) {
+  if (muscles->bond_types.size() < passive.bond_types.size() ||
+      muscles->particles.size() < passive.particles.size())
+    return false;
+  for (size_t k = 0; k < passive.bond_types.size(); ++k)
+    if (muscles->bond_types[k].name != passive.bond_types[k].name) return false;
+  for (size_t i = 0; i < passive.particles.size(); ++i)
+    if (muscles->particles[i].name != passive.particles[i].name) return false;
+  const std::vector<ParamRef> refs = freeParameters(passive);
+  const std::vector<ParamRef> theirs = freeParameters(*muscles);
+  if (refs.size() != theirs.size()) return false;
+  for (size_t k = 0; k < refs.size(); ++k) {
+    if (refs[k].name != theirs[k].name) return false;
+    paramOf(*muscles, refs[k]) = paramOf(passive, refs[k]);
+  }
+  muscles->frame_rate_hz = passive.frame_rate_hz;
+  return true;
+}
+
 double modelRmsM(const Model& model, const Trajectory& window, int horizon) {
   try {
     const PredictionReport report = evaluatePredictions(model, window, {horizon}, 1.0);
@@ -148,31 +170,54 @@ std::optional<Model> MuscleJob::fitIfDue(const Model& passive, const Trajectory&
   ridge_ = ridge;
   ++fits_;
   next_refit_s_ = now_s + last_fit_s_ + options_.refit_period_s;
+  model_ = model;
   return model;
 }
 
-std::optional<Model> MuscleJob::refitIfDue(const Model& current, const Trajectory& window, double now_s) {
+Trajectory MuscleJob::asModelParticles(const Trajectory& window, const Model& model) {
+  std::vector<std::string> names;
+  for (const Particle& p : model.particles) names.push_back(p.name);
+  if (names == window.marker_names) return window;
+  return remapMarkers(window, names, nullptr);
+}
+
+std::optional<Model> MuscleJob::withMuscles(const Model& passive) const {
+  std::optional<Model> model;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    model = model_;
+  }
+  if (!model || !layOn(passive, &*model)) return std::nullopt;
+  return model;
+}
+
+std::optional<Model> MuscleJob::refitIfDue(const Model& passive, const Trajectory& window, double now_s) {
   uint64_t version = 0;
   double ridge = 1.0;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (cancelled_ || state_ != State::kFitted || !(options_.refit_period_s > 0.0)) return std::nullopt;
     if (now_s < next_refit_s_) return std::nullopt;
-    next_refit_s_ = now_s + options_.refit_period_s;
     version = version_;
     ridge = ridge_;
   }
+  const std::optional<Model> current = withMuscles(passive);
+  if (!current) return std::nullopt;
   const auto start = std::chrono::steady_clock::now();
-  Model rated = current;  // the stream's rate where the model leaves it open (see fitIfDue)
+  Model rated = *current;  // the stream's rate where the model leaves it open (see fitIfDue)
   if (!(rated.frame_rate_hz > 0.0)) rated.frame_rate_hz = window.frame_rate_hz;
-  MuscleRefitResult r = refitMuscleActivations(rated, window, ridge, options_.fit.gain_margin);
-  const bool adopted = r.ok && judgeRefit(rated, r.model, window);
-  r.model.frame_rate_hz = current.frame_rate_hz;
+  const Trajectory data = asModelParticles(window, rated);
+  MuscleRefitResult r = refitMuscleActivations(rated, data, ridge, options_.fit.gain_margin);
+  const bool adopted = r.ok && judgeRefit(rated, r.model, data);
+  r.model.frame_rate_hz = passive.frame_rate_hz;
   std::lock_guard<std::mutex> lock(mutex_);
   ++refits_;
   last_refit_ms_ = 1e3 * secondsSince(start);
+  // The period runs from the end of a refit: the refits take at most their share of a core.
+  next_refit_s_ = now_s + last_refit_ms_ / 1e3 + options_.refit_period_s;
   if (version != version_ || !adopted) return std::nullopt;
   ++refits_adopted_;
+  model_ = r.model;
   return std::move(r.model);
 }
 
@@ -183,19 +228,12 @@ bool MuscleJob::judgeRefit(const Model& current, const Model& refitted, const Tr
   return !std::isfinite(before_m) || after_m <= before_m;
 }
 
-void MuscleJob::startFitted(int muscles, double ridge) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  state_ = State::kFitted;
-  muscles_ = muscles;
-  ridge_ = ridge;
-  message_ = "the model came with its muscles";
-}
-
 void MuscleJob::forget() {
   std::lock_guard<std::mutex> lock(mutex_);
   ++version_;
   state_ = State::kWaiting;
   muscles_ = 0;
+  model_.reset();
   next_try_s_ = -1e300;
 }
 

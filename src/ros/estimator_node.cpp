@@ -104,11 +104,10 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
   if (options_.sensor_muscles) {
     MuscleJobOptions mo = options_.muscles;
     mo.say = [](const std::string& line) { ROS_INFO("estimator_node: %s", line.c_str()); };
-    // PointCloud2 input carries the particles by position, no names: the anchors would be
-    // points the cloud does not have, so that input gets the layout without them.
-    if (options_.input_type == InputType::kPointCloud && options_.bag.empty()) mo.fit.anchors = false;
-    muscles_ = std::make_unique<MuscleJob>(mo);
-    if (const int present = refittableMuscleTypes(model)) muscles_->startFitted(present);
+    if (refittableMuscleTypes(model) > 0)
+      ROS_WARN("estimator_node: ~sensor_muscles: the model has muscles already; none are added");
+    else
+      muscles_ = std::make_unique<MuscleJob>(mo);
   }
   estimator_ = std::make_unique<OnlineEstimator>(model, estimator_options);
   if (!estimator_options.estimate_values)
@@ -269,8 +268,9 @@ void EstimatorNode::onStatsTimer(const ros::WallTimerEvent&) {
   stats.latency = latency_stats_.summary();
   if (predictions_) {
     const double now_s = steadyNowS();
+    Trajectory window;
     if (predictions_->due(now_s) && estimator_->estimate().valid &&
-        !predictions_->evaluate(now_s, estimator_->currentModel(), estimator_->window()))
+        !predictions_->evaluate(now_s, shownModel(&window), window))
       ROS_WARN_THROTTLE(60.0, "estimator_node: no prediction figures on this window: %s",
                         predictions_->lastError().c_str());
     stats.prediction = predictions_->report();
@@ -332,9 +332,7 @@ void EstimatorNode::structureLoop() {
     try {
       std::lock_guard<std::mutex> lock(input_mutex_);
       estimator_->replaceModel(r->model);  // same particles: the window stays
-      names_.setParticles(estimator_->particleNames());  // a reselection drops muscle anchors
-      ++model_epoch_;
-      if (muscles_) muscles_->forget();
+      if (muscles_) muscles_->forget();  // fitted on the old structure
     } catch (const std::exception& e) {
       ROS_ERROR("estimator_node: the chosen structure was refused: %s", e.what());
       continue;
@@ -354,46 +352,35 @@ void EstimatorNode::muscleLoop() {
     if (structure_ && structure_->state() != StructureJob::State::kChosen) continue;
     const Estimate e = estimator_->estimate();
     if (!e.valid) continue;
-    const uint64_t epoch = model_epoch_;
-    const Model model = estimator_->currentModel();
+    const Model passive = estimator_->currentModel();
     const Trajectory window = estimator_->window();
-    if (window.numMarkers() != static_cast<int>(model.particles.size())) continue;
+    if (window.numMarkers() != static_cast<int>(passive.particles.size())) continue;
     const double now_s = steadyNowS();
-    if (muscles_->state() != MuscleJob::State::kFitted) {
-      if (e.generation < kMuscleMinGenerations) continue;
-      const MuscleJob::State before = muscles_->state();
-      const std::optional<Model> fitted = muscles_->fitIfDue(model, window, now_s);
-      if (fitted) {
-        ROS_INFO("estimator_node: sensor muscles added in %.1f s: %s", muscles_->lastFitS(),
-                 muscles_->lastMessage().c_str());
-        adoptMuscles(*fitted, epoch, "sensor muscles");
-      } else if (muscles_->state() != before &&
-                 (muscles_->state() == MuscleJob::State::kNotKept ||
-                  muscles_->state() == MuscleJob::State::kFailed)) {
-        ROS_WARN("estimator_node: no sensor muscles (%s); tried again on a later window",
-                 muscles_->lastMessage().c_str());
-      }
+    if (muscles_->state() == MuscleJob::State::kFitted) {
+      muscles_->refitIfDue(passive, window, now_s);
       continue;
     }
-    if (const std::optional<Model> refitted = muscles_->refitIfDue(model, window, now_s))
-      adoptMuscles(*refitted, epoch, "refitted sensor muscles");
+    if (e.generation < kMuscleMinGenerations) continue;
+    const MuscleJob::State before = muscles_->state();
+    if (muscles_->fitIfDue(passive, window, now_s)) {
+      ROS_INFO("estimator_node: sensor muscles added in %.1f s: %s", muscles_->lastFitS(),
+               muscles_->lastMessage().c_str());
+    } else if (muscles_->state() != before && (muscles_->state() == MuscleJob::State::kNotKept ||
+                                                muscles_->state() == MuscleJob::State::kFailed)) {
+      ROS_WARN("estimator_node: no sensor muscles (%s); tried again on a later window",
+               muscles_->lastMessage().c_str());
+    }
   }
 }
 
-void EstimatorNode::adoptMuscles(const Model& model, uint64_t epoch, const char* what) {
-  std::string why;
-  try {
-    std::lock_guard<std::mutex> lock(input_mutex_);
-    if (epoch != model_epoch_) return;  // a structure or a model came meanwhile
-    why = estimator_->replaceFixedParts(model);
-    if (why.empty()) names_.setParticles(estimator_->particleNames());  // anchors: no marker
-  } catch (const std::exception& ex) {
-    why = ex.what();
-  }
-  if (!why.empty()) {
-    ROS_ERROR("estimator_node: the %s were refused: %s", what, why.c_str());
-    muscles_->forget();
-  }
+Model EstimatorNode::shownModel(Trajectory* window) const {
+  Model model = estimator_->currentModel();
+  if (window) *window = estimator_->window();
+  if (!muscles_) return model;
+  std::optional<Model> with = muscles_->withMuscles(model);
+  if (!with) return model;
+  if (window) *window = MuscleJob::asModelParticles(*window, *with);
+  return std::move(*with);
 }
 
 void EstimatorNode::bagLoop() {
@@ -483,9 +470,10 @@ void EstimatorNode::markersLoop() {
 }
 
 bool EstimatorNode::publishMarkers(const Estimate& e) {
-  const Trajectory window = estimator_->window();
-  const std::optional<VisualisationSnapshot> snapshot = makeVisualisationSnapshot(
-      estimator_->currentModel(), window, e, options_.color_bonds_by);
+  Trajectory window;
+  const Model model = shownModel(&window);
+  const std::optional<VisualisationSnapshot> snapshot =
+      makeVisualisationSnapshot(model, window, e, options_.color_bonds_by);
   if (!snapshot) return false;
   VisualisationSnapshot scene = *snapshot;
   if (predictions_) {  // the model against the guesses, 10 frames ahead on the window
@@ -513,7 +501,7 @@ bool EstimatorNode::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Resp
 }
 
 std::string EstimatorNode::exportYaml(const Estimate& e) const {
-  Model model = estimator_->currentModel();
+  Model model = shownModel();  // with the sensor muscles when they are kept
   // currentModel() fills in the estimate of its own moment and the worker may have moved on
   // since `e` was taken: write e's values, so that values, generation, cost and std agree.
   const std::vector<ParamRef> refs = freeParameters(model);
@@ -570,7 +558,6 @@ bool EstimatorNode::onLoad(motion_model_estimation::LoadModel::Request& req,
       const std::vector<std::string> particles = estimator_->particleNames();
       if (particles != particles_before) clock_jumps_.forgetWindow();  // the window was emptied
       names_.setParticles(particles);
-      ++model_epoch_;
       if (muscles_) muscles_->forget();
     }
     last_published_generation_ = 0;

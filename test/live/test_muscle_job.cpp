@@ -1,8 +1,9 @@
 // The live node's sensor muscles: the refit of their linear part recovers a linear controller
 // from its data alone, the job adds muscles to a passive model on a window (its passive
-// parameters left free for the estimator), refits them on a later window once its period has
-// passed (adopted only where the refit predicts the window no worse), forgets them on request,
-// and turns an unusable window into a state and a reason, never a crash.
+// parameters left free), lays them on the estimator's latest passive values, refits them on a
+// later window once its period has passed (kept only where the refit predicts the window no
+// worse), forgets them on request, and turns an unusable window into a state and a reason,
+// never a crash.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -27,13 +28,6 @@ Model linearMuscleObject(double scale = 100.0) {
   type.param(mme::kGain).value *= scale;
   for (mme::Param& p : type.network) p.value /= scale;
   return m;
-}
-
-/// `data` with `model`'s particles as markers (the sensor muscles' anchors have none).
-mme::Trajectory asParticles(const mme::Trajectory& data, const Model& model) {
-  std::vector<std::string> names;
-  for (const mme::Particle& p : model.particles) names.push_back(p.name);
-  return mme::remapMarkers(data, names, nullptr);
 }
 
 /// The model's 10-frame open-loop error on `window` [m].
@@ -137,30 +131,38 @@ TEST(MuscleJob, AddsMusclesThenRefitsTheirLinearPartOnALaterWindow) {
   // Fitted: no second fit.
   EXPECT_FALSE(job.fitIfDue(passive, data, 100.0).has_value());
 
-  // A later window, the muscles silenced: before the period nothing runs, after it the refit
-  // brings the linear part back.
-  const mme::Trajectory later = asParticles(mme::sliceFrames(data, 150, 150), *fitted);
-  Model silenced = *fitted;
-  for (mme::BondType& type : silenced.bond_types)
-    if (type.kind == mme::BondKind::kMuscle)
-      for (mme::Param& p : type.network) p.value = 0.0;
-  EXPECT_FALSE(job.refitIfDue(silenced, later, job.lastFitS() + 0.5).has_value());
+  // The kept muscles laid on the estimator's passive model: its free values become theirs.
+  Model estimated = passive;
+  estimated.bond_types[estimated.bondTypeIndex("s")].param(mme::kStiffness).value = 61.0;
+  const std::optional<Model> laid = job.withMuscles(estimated);
+  ASSERT_TRUE(laid.has_value());
+  EXPECT_EQ(laid->bond_types[laid->bondTypeIndex("s")].value(mme::kStiffness), 61.0);
+  EXPECT_EQ(laid->bonds.size(), fitted->bonds.size());
+  EXPECT_FALSE(job.withMuscles(mme::test::smallObject()).has_value());  // another structure
+
+  // A later window (the estimator's: no anchor markers): before the period nothing runs, after
+  // it the linear part is refitted there and kept, predicting that window no worse.
+  const mme::Trajectory later = mme::sliceFrames(data, 150, 150);
+  EXPECT_FALSE(job.refitIfDue(passive, later, job.lastFitS() + 0.5).has_value());
   EXPECT_EQ(job.refits(), 0u);
-  const std::optional<Model> refitted = job.refitIfDue(silenced, later, job.lastFitS() + 1.5);
+  const std::optional<Model> refitted = job.refitIfDue(passive, later, job.lastFitS() + 1.5);
   ASSERT_TRUE(refitted.has_value());
   EXPECT_EQ(job.refits(), 1u);
   EXPECT_EQ(job.refitsAdopted(), 1u);
   EXPECT_GT(job.lastRefitMs(), 0.0);
-  EXPECT_NE(mme::modelToYaml(*refitted), mme::modelToYaml(silenced));
-  EXPECT_LT(predict10M(*refitted, later), 0.5 * predict10M(silenced, later));
+  EXPECT_NE(mme::modelToYaml(*refitted), mme::modelToYaml(*fitted));
+  EXPECT_LE(predict10M(*refitted, later), predict10M(*fitted, later));
+  EXPECT_EQ(mme::modelToYaml(*job.withMuscles(passive)), mme::modelToYaml(*refitted));  // kept
   // Its free parameters are still the passive ones.
   after.clear();
   for (const mme::ParamRef& ref : mme::freeParameters(*refitted)) after.push_back(ref.name);
   EXPECT_EQ(after, before);
+  // The next refit waits for the period from this one's end.
+  EXPECT_FALSE(job.refitIfDue(passive, later, job.lastFitS() + 2.0).has_value());
   // The same input gives the same refit.
   mme::MuscleJob again(jobOptions());
   ASSERT_TRUE(again.fitIfDue(passive, mme::sliceFrames(data, 0, 150), 0.0).has_value());
-  const std::optional<Model> same = again.refitIfDue(silenced, later, again.lastFitS() + 1.5);
+  const std::optional<Model> same = again.refitIfDue(passive, later, again.lastFitS() + 1.5);
   ASSERT_TRUE(same.has_value());
   EXPECT_EQ(mme::modelToYaml(*same), mme::modelToYaml(*refitted));
 
@@ -168,7 +170,8 @@ TEST(MuscleJob, AddsMusclesThenRefitsTheirLinearPartOnALaterWindow) {
   job.forget();
   EXPECT_EQ(job.status(), "waiting");
   EXPECT_EQ(job.muscles(), 0);
-  EXPECT_FALSE(job.refitIfDue(*refitted, later, 1e6).has_value());
+  EXPECT_FALSE(job.refitIfDue(passive, later, 1e6).has_value());
+  EXPECT_FALSE(job.withMuscles(passive).has_value());
 }
 
 TEST(MuscleJob, AnUnusableWindowFailsWithTheReasonAndRetriesLater) {

@@ -66,11 +66,12 @@ class EstimatorNode {
   /// hands the model to the estimator and writes the report.
   void structureLoop();
   /// ~sensor_muscles: once the passive model is estimated (and its structure chosen), adds
-  /// sensor muscles on the window, then refits their linear part each period; each model is
-  /// handed to the estimator without stopping its search (replaceFixedParts).
+  /// sensor muscles on the window, then refits their linear part each period (MuscleJob keeps
+  /// them; the estimator goes on with the passive model).
   void muscleLoop();
-  /// Hands a model with muscles to the estimator unless the model changed since `epoch`.
-  void adoptMuscles(const Model& model, uint64_t epoch, const char* what);
+  /// The estimator's current model with the kept muscles laid on it (the passive one when none)
+  /// and `window` with its particles (anchors added, occluded); what is judged, drawn, exported.
+  Model shownModel(Trajectory* window = nullptr) const;
   void bagLoop();
   void onPublishTimer(const ros::WallTimerEvent&);
   /// ~markers thread: rebuilds the rviz markers as soon as a frame is accepted (latest frame
@@ -101,9 +102,6 @@ class EstimatorNode {
   std::string autosave_target_;  // confined absolute path, "" = off
   std::thread worker_, bag_thread_, markers_thread_, structure_thread_, muscle_thread_;
   std::unique_ptr<MuscleJob> muscles_;  // null unless ~sensor_muscles
-  /// Bumped (under input_mutex_) when a chosen structure or ~load_model replaces the model: a
-  /// muscle fit begun before belongs to the old one.
-  std::atomic<uint64_t> model_epoch_{0};
   std::unique_ptr<StructureJob> structure_;  // null unless ~select_structure
   std::string structure_report_target_;      // confined absolute path
   // Marker thread hand-off (markersLoop): the newest accepted frame's arrival and a counter.

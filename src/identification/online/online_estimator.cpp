@@ -568,34 +568,4 @@ void OnlineEstimator::replaceModel(const Model& model) {
   estimate_ = Estimate();
 }
 
-std::string OnlineEstimator::replaceFixedParts(const Model& model) {
-  checkModel(model, options_);
-  const std::vector<ParamRef> refs = freeParameters(model);
-  std::lock_guard<std::mutex> lock(model_mutex_);
-  const std::vector<ParamRef> before = freeParameters(model_);
-  bool same = refs.size() == before.size();
-  for (size_t k = 0; same && k < refs.size(); ++k)
-    same = refs[k].name == before[k].name && refs[k].bond_type == before[k].bond_type &&
-           refs[k].param == before[k].param;
-  if (!same) return "its free parameters differ";
-  const size_t n_before = model_.particles.size();
-  if (model.particles.size() < n_before) return "it has fewer particles";
-  for (size_t i = 0; i < model.particles.size(); ++i) {
-    if (i < n_before && model.particles[i].name != model_.particles[i].name)
-      return "particle " + std::to_string(i) + " differs";
-    if (i >= n_before && !model.particles[i].fixed) return "a new particle is not fixed";
-  }
-  {
-    std::lock_guard<std::mutex> frames_lock(frames_mutex_);
-    for (size_t i = n_before; i < model.particles.size(); ++i) {
-      names_.push_back(model.particles[i].name);
-      for (auto& x : positions_) x.push_back(Eigen::Vector3d::Zero());
-      for (auto& o : occluded_) o.push_back(1);  // masked, as addFrame masks a kNoMarker sample
-    }
-    fixed_ = fixedFlags(model);
-  }
-  model_ = model;  // the version stays: the population and the estimate belong to it still
-  return "";
-}
-
 }  // namespace mme

@@ -136,14 +136,6 @@ class OnlineEstimator {
   /// Replaces the model (same or different structure); the population restarts. Throws
   /// InputError when unusable.
   void replaceModel(const Model& model);
-  /// Replaces the model by one with the same free parameters (the same references, in the same
-  /// order) and the same particles, possibly followed by new fixed ones: a model whose fixed
-  /// parts changed, such as sensor muscles added or refitted beside the estimated passive ones.
-  /// The population, the refinement, the estimate and the window live on (a new fixed particle
-  /// joins the window's frames as a point of the model only, kNoMarker); the next update()
-  /// searches on it. Returns why not (and changes nothing) when the model does not qualify
-  /// ("" when replaced). Throws InputError when the model is unusable.
-  std::string replaceFixedParts(const Model& model);
   std::vector<std::string> particleNames() const;  ///< model particle order (thread-safe copy)
   double frameRateHz() const;
   /// Simulates `frames` frames of `model` from the first two frames of `window` (positions and
