@@ -2,8 +2,12 @@
 // (sensors, muscles, parameters, fitted samples) and how it predicts its validation frames.
 //
 //   bench_sensor_muscles --model PASSIVE.yaml --trajectory FILE [--first-frame F] [--frames N]
-//                        [--sensors S] [--quiet]
+//                        [--sensors S] [--force] [--quiet]
+//   bench_sensor_muscles --random-object [--force] [--quiet]
 //
+// --random-object: the noiseless 18-marker random object (scenes/random_object.h), 300 frames
+// simulated, its true model as the passive one, the first 240 frames fitted. --force: the search
+// runs even where the gain gate would skip it (SensorMuscleOptions::skip_without_gain off).
 // PASSIVE.yaml is a passive model of FILE's markers (e.g. what identify writes before its muscle
 // step); the frames are those identify fitted. Prints the muscle step's progress lines, then one
 // line "muscles_s=... parameters=... samples=... kept=..." to compare builds in the same run.
@@ -14,17 +18,19 @@
 #include <string>
 #include <vector>
 
+#include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/core/trajectory.h"
 #include "motion_model_estimation/identification/muscles/sensor_muscles.h"
 #include "motion_model_estimation/io/model_yaml.h"
 #include "motion_model_estimation/io/trajectory_io.h"
+#include "motion_model_estimation/scenes/random_object.h"
 
 namespace {
 
 struct Args {
   std::string model, trajectory;
   int first_frame = 0, frames = -1, sensors = 16;
-  bool quiet = false;
+  bool quiet = false, force = false, random_object = false;
 };
 
 Args parse(int argc, char** argv) {
@@ -41,9 +47,11 @@ Args parse(int argc, char** argv) {
     else if (key == "--frames") a.frames = std::atoi(value().c_str());
     else if (key == "--sensors") a.sensors = std::atoi(value().c_str());
     else if (key == "--quiet") a.quiet = true;
+    else if (key == "--force") a.force = true;
+    else if (key == "--random-object") a.random_object = true;
     else throw std::runtime_error("unknown option " + key);
   }
-  if (a.model.empty() || a.trajectory.empty()) throw std::runtime_error("--model and --trajectory are required");
+  if (!a.random_object && (a.model.empty() || a.trajectory.empty())) throw std::runtime_error("--model and --trajectory are required");
   return a;
 }
 
@@ -52,15 +60,23 @@ Args parse(int argc, char** argv) {
 int main(int argc, char** argv) {
   try {
     const Args a = parse(argc, argv);
-    const mme::Model passive = mme::loadModelFile(a.model);
-    mme::Trajectory data = mme::readTrajectoryFile(a.trajectory);
-    const int frames = a.frames > 0 ? a.frames : data.numFrames() - a.first_frame;
-    data = mme::sliceFrames(data, a.first_frame, frames);
+    mme::Model passive;
+    mme::Trajectory data;
+    if (a.random_object) {
+      passive = mme::makeRandomObject(mme::RandomObjectSpec());
+      data = mme::sliceFrames(mme::simulateTrajectory(passive, 300, passive.frame_rate_hz), 0, 240);
+    } else {
+      passive = mme::loadModelFile(a.model);
+      data = mme::readTrajectoryFile(a.trajectory);
+      const int frames = a.frames > 0 ? a.frames : data.numFrames() - a.first_frame;
+      data = mme::sliceFrames(data, a.first_frame, frames);
+    }
     std::vector<std::string> names, missing;
     for (const mme::Particle& p : passive.particles) names.push_back(p.name);
     data = mme::remapMarkers(data, names, &missing);
     mme::SensorMuscleOptions o;
     o.sensors = a.sensors;
+    o.skip_without_gain = !a.force;
     if (!a.quiet) o.progress = [](const std::string& line) { std::printf("%s\n", line.c_str()); std::fflush(stdout); };
     const mme::SensorMuscleResult r = mme::addSensorMuscles(passive, data, o);
     std::printf("muscles_s=%.2f sensors=%d muscles=%d parameters=%zu samples=%zu validation_mm=%.3f "

@@ -74,7 +74,13 @@ void MuscleEquations::accumulate(int window, int centre_begin, int centre_end, S
       ring.pop_front();
       ring.push_back(pieces(t + window - 1));
     }
-    for (int i = 0; i < n_; ++i) addWindowEquation(i, window, ring, &g, sys);
+    for (int i = 0; i < n_; ++i) {
+      if (window == 1) {
+        if (ring[0].particle_ok[i]) addFrameEquation(i, ring[0], sys);
+      } else {
+        addWindowEquation(i, window, ring, &g, sys);
+      }
+    }
   }
 }
 
@@ -151,12 +157,25 @@ FramePieces MuscleEquations::pieces(const Frames3& frames) const {
 }
 
 void MuscleEquations::addPieces(const FramePieces& f, System* sys) const {
-  Gradients g(m_);
-  for (int i = 0; i < n_; ++i) {
-    if (!f.particle_ok[i]) continue;
-    const double mass = passive_.particles[i].mass_kg;
-    for (const auto& [m, sign] : at_[i]) g[m] = (sign / mass) * f.u[m] * f.phi.col(m).transpose();
-    addEquation(i, g, f.y[i], sys);
+  for (int i = 0; i < n_; ++i)
+    if (f.particle_ok[i]) addFrameEquation(i, f, sys);
+}
+
+/// addEquation for one frame's rows of particle i: muscle m's gradient there is the rank-one
+/// (sign / mass) u_m phi_m^T, so each block of the normal matrix is the outer product
+/// phi_m phi_m2^T scaled by (u_m . u_m2) / mass^2, a third of the work of the general product.
+void MuscleEquations::addFrameEquation(int i, const FramePieces& f, System* sys) const {
+  const double mass = passive_.particles[i].mass_kg;
+  const Eigen::Vector3d& y = f.y[i];
+  sys->btb += y.squaredNorm();
+  sys->rows += 3;
+  for (const auto& [m, sign] : at_[i]) {
+    const double wm = sign / mass;
+    sys->atb.segment(m * k_, k_).noalias() += (wm * f.u[m].dot(y)) * f.phi.col(m);
+    for (const auto& [m2, sign2] : at_[i]) {
+      const double c = wm * (sign2 / mass) * f.u[m].dot(f.u[m2]);
+      sys->ata.block(m * k_, m2 * k_, k_, k_).noalias() += c * f.phi.col(m) * f.phi.col(m2).transpose();
+    }
   }
 }
 

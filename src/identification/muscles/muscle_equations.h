@@ -82,6 +82,7 @@ class MuscleEquations {
   void addWindowEquation(int i, int window, const std::deque<FramePieces>& ring, Gradients* g,
                          System* sys) const;
   void addEquation(int i, const Gradients& g, const Eigen::Vector3d& y, System* sys) const;
+  void addFrameEquation(int i, const FramePieces& f, System* sys) const;
   State stateAt(const Frames3& f) const;
   bool muscleGeometry(const Frames3& f, int m, const State& state, Eigen::Vector3d* u, double* e,
                       double* s) const;
