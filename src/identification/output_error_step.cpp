@@ -30,10 +30,6 @@ constexpr double kDivergedFactor = 10.0;
 constexpr int kScoutIterations = 15;
 /// Most substeps per frame the stiff-scene rule asks for.
 constexpr int kMaxSubsteps = 64;
-/// omega h per substep from which a model that cannot explain the motion still gets the substep
-/// trial: half semi-implicit Euler's stability limit (2), where its error is no longer a small
-/// drift.
-constexpr double kStiffOmegaH = 1.0;
 
 std::string formatValue(double v) {
   char text[32];
@@ -70,11 +66,10 @@ OutputErrorOutcome OutputErrorStep::run(const std::vector<double>& one_step_gene
   const auto hopeless = [&] {
     return misfit(best) && !(best_rms_m < (1.0 - kWorthwhileGain) * out_.one_step_judged_rms_m);
   };
-  // Near the integrator's stability limit, too few substeps can make a model that explains the
-  // motion look like one that does not: the trial comes before the judgement there. Further
-  // from it the trial (a fit at several times the cost) waits for a model worth refining.
-  const bool trial = !hopeless() || omegaH(best.values) / model_.substeps >= kStiffOmegaH;
-  if (trial) trySubsteps(&best, &best_rms_m);
+  // Too few substeps for the model's stiffness also leave residuals far above the noise (a
+  // stiff scene's noiseless data look like a model that cannot explain them): the trial comes
+  // before the judgement.
+  trySubsteps(&best, &best_rms_m);
   const std::string horizon = std::to_string(kJudgeHorizonFrames) + " frames ahead";
   const bool stopped_early = hopeless();
   if (stopped_early) {
@@ -82,8 +77,7 @@ OutputErrorOutcome OutputErrorStep::run(const std::vector<double>& one_step_gene
           formatValue(best.noise_std_m / std::max(noise_estimate_m_, 1e-9)) +
           "x the markers' noise (the model does not explain the motion), and predicts " + horizon + " " +
           formatJudged(best_rms_m) + " against " + formatJudged(out_.one_step_judged_rms_m) +
-          " for the one-step answer: " + (trial ? "the final fit is" : "the substep trial and the final fit are") +
-          " not run");
+          " for the one-step answer: the final fit is not run");
     if (options_.estimate_std)
       out_.std_missing_reason = "the output error stopped after its first stage, whose uncertainty is not computed";
   } else {
