@@ -63,11 +63,15 @@ OutputErrorOutcome OutputErrorStep::run(const std::vector<double>& one_step_gene
     return out_;
   }
   double best_rms_m = judge(model_, best.genes);
-  // Too few substeps for the model's stiffness can make a model that explains the motion look
-  // like one that does not: the trial comes before the judgement.
+  const auto hopeless = [&] {
+    return misfit(best) && !(best_rms_m < (1.0 - kWorthwhileGain) * out_.one_step_judged_rms_m);
+  };
+  // Too few substeps for the model's stiffness also leave residuals far above the noise (a
+  // stiff scene's noiseless data look like a model that cannot explain them): the trial comes
+  // before the judgement.
   trySubsteps(&best, &best_rms_m);
   const std::string horizon = std::to_string(kJudgeHorizonFrames) + " frames ahead";
-  const bool stopped_early = misfit(best) && !(best_rms_m < (1.0 - kWorthwhileGain) * out_.one_step_judged_rms_m);
+  const bool stopped_early = hopeless();
   if (stopped_early) {
     note_("the output error's first stage leaves residuals of " + formatValue(best.noise_std_m) + " m RMS, " +
           formatValue(best.noise_std_m / std::max(noise_estimate_m_, 1e-9)) +
@@ -80,10 +84,18 @@ OutputErrorOutcome OutputErrorStep::run(const std::vector<double>& one_step_gene
     finalFit(&best, &best_rms_m);
   }
   noteFit(best, stopped_early);
-  const std::string figures = "judged " + horizon + " on the fitted frames, the output error's answer predicts " +
-                              formatJudged(best_rms_m) + " and the one-step answer " +
-                              formatJudged(out_.one_step_judged_rms_m);
-  if (!replacesStanding(best_rms_m, out_.one_step_judged_rms_m)) {
+  std::string figures = "judged " + horizon + " on the fitted frames, the output error's answer predicts " +
+                        formatJudged(best_rms_m) + " and the one-step answer " +
+                        formatJudged(out_.one_step_judged_rms_m);
+  if (model_.substeps != coarse_substeps)
+    figures += " (another integrator: compared by the output-error cost, " + formatValue(best.observation_cost_m2) +
+               " against " + formatValue(one_step_oe_cost_m2_) + " m^2)";
+  // Another integrator than the one-step answer's: compared by the output-error cost as the trial
+  // did (the first scout's start is the one-step answer's), a blow-up never adopted.
+  const bool adopt = model_.substeps == coarse_substeps
+                         ? replacesStanding(best_rms_m, out_.one_step_judged_rms_m)
+                         : !std::isinf(best_rms_m) && best.observation_cost_m2 <= one_step_oe_cost_m2_;
+  if (!adopt) {
     note_("warning: " + figures + ": the output error's answer is worse and not adopted, the one-step answer is kept");
     model_.substeps = coarse_substeps;
     out_.std_missing_reason.clear();
@@ -158,6 +170,7 @@ OutputErrorResult OutputErrorStep::scoutStarts(const std::vector<double>& one_st
   const std::vector<std::vector<double>> from = starts(one_step_genes);
   for (size_t s = 0; s < from.size(); ++s) {
     OutputErrorResult oe = fit(model_, from[s], kScoutIterations, false);
+    if (s == 0 && oe.ran) one_step_oe_cost_m2_ = oe.start_cost_m2;
     const std::string why = unusableBecause(oe);
     if (oe.ran && !why.empty()) *failed = why;
     if (!why.empty()) oe.ran = false;
@@ -214,9 +227,10 @@ void OutputErrorStep::trySubsteps(OutputErrorResult* best, double* best_rms_m) {
     note_(head + "could not be tried (the fit " + why + "): kept " + std::to_string(model_.substeps));
     return;
   }
+  // Integrators compared by the output-error cost (each fits its own start states): the judge
+  // starts from frame differences, the velocity a one-step integrator wants, and so favours it.
   const double finer_rms_m = judge(finer, oe.genes);
-  const bool better = oe.observation_cost_m2 < 0.5 * best->observation_cost_m2 &&
-                      replacesStanding(finer_rms_m, *best_rms_m);
+  const bool better = oe.observation_cost_m2 < 0.5 * best->observation_cost_m2 && !std::isinf(finer_rms_m);
   note_(head + "fit the frames " + (better ? "better" : "no better") + " than " + std::to_string(model_.substeps) +
         " (output-error cost " + formatValue(oe.observation_cost_m2) + " against " +
         formatValue(best->observation_cost_m2) + " m^2, " + std::to_string(kJudgeHorizonFrames) +

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -63,6 +64,8 @@ class OutputErrorStep {
   std::function<void(const std::string&)> note_;
   Model model_;  ///< the integrator the output error fits with (the trial may refine it)
   double noise_estimate_m_ = 0.0;
+  /// The one-step answer's output-error cost (the first scout's start) [m^2].
+  double one_step_oe_cost_m2_ = std::numeric_limits<double>::infinity();
   OutputErrorOutcome out_;
 };
 

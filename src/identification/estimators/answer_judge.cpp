@@ -5,15 +5,17 @@
 #include <limits>
 #include <stdexcept>
 
+#include "motion_model_estimation/core/observations.h"
 #include "motion_model_estimation/identification/estimators/prediction_error.h"
 
 namespace mme {
 
 namespace {
 
-/// A figure beyond this [m] means a prediction left the finite numbers (evaluatePredictions
-/// scores such a sample 1e300 m^2) or is as good as gone.
-constexpr double kBlownUp_m = 1e100;
+/// A figure beyond this many times the data's extent (the free particles' bounding-box diagonal)
+/// means the predictions left the data for good (or the finite numbers: evaluatePredictions
+/// scores such a sample 1e300 m^2): the model blew up.
+constexpr double kBlownUpExtents = 1e3;
 
 }  // namespace
 
@@ -30,7 +32,10 @@ double judgedPredictionRms_m(const Model& model, const Trajectory& trajectory, i
   for (const PredictionError& row : report.rows) {
     if (row.predictor != Predictor::kModel) continue;
     if (row.samples == 0) return nan;
-    if (!std::isfinite(row.rms_m) || row.rms_m > kBlownUp_m) return std::numeric_limits<double>::infinity();
+    const double extent_m =
+        RolloutBound::of(model, prepareObservations(model, trajectory), 0, trajectory.numFrames()).extent_m;
+    if (!std::isfinite(row.rms_m) || row.rms_m > kBlownUpExtents * extent_m)
+      return std::numeric_limits<double>::infinity();
     return row.rms_m;
   }
   return nan;

@@ -122,6 +122,7 @@ TEST(OnlineEstimator, AnOutputErrorFitThatPredictsWorseIsNotPublished) {
   options.window_frames = 60;
   options.cost = mme::CostChoice::kOutputError;
   options.es.threads = 1;
+  options.update_budget_s = 100.0;  // every update its 5 generations: the refinements on schedule
   mme::OnlineEstimator estimator(search, options);
   feed(&estimator, data, 0, 60);
   for (int u = 0; u < 4; ++u) {

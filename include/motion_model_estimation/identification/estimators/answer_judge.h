@@ -25,8 +25,9 @@ constexpr double kJudgeTolerance = 0.01;
 /// The judged figure of `model` (every free value set, its substeps the integrator) on
 /// `trajectory` (its particles as markers): the RMS per coordinate [m] of its open-loop
 /// predictions horizon_frames ahead from every frame that can start one. +infinity when a
-/// prediction is not finite or beyond 1e100 m (the model blows up); NaN when nothing can be
-/// judged (too few frames, no frame to start from, a model that cannot be simulated).
+/// prediction is not finite or the figure is over 1000 times the data's extent (the free
+/// particles' bounding-box diagonal): the model blew up. NaN when nothing can be judged (too few
+/// frames, no frame to start from, a model that cannot be simulated).
 double judgedPredictionRms_m(const Model& model, const Trajectory& trajectory,
                              int horizon_frames = kJudgeHorizonFrames);
 
