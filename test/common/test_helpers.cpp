@@ -7,6 +7,8 @@
 #include <limits>
 
 #include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/scenes/scenes.h"
+#include "motion_model_estimation/core/stiffness.h"
 
 namespace mme {
 namespace test {
@@ -98,6 +100,17 @@ Model particlesOnly(Model model) {
   model.bonds.clear();
   model.bond_types.clear();
   return model;
+}
+
+StiffAtOneSubstep::StiffAtOneSubstep() : truth(makeScene("paper_object").model) {
+  std::vector<Eigen::Vector3d> x;
+  for (const Particle& p : truth.particles) x.push_back(p.position_m);
+  truth.frame_rate_hz = stiffestModeRadPerS(truth, x) / 2.5;
+  truth.substeps = 20;
+  data = simulateTrajectory(truth, 60, truth.frame_rate_hz);
+  addGaussianNoise(&data, 1e-4, 7);
+  search = withoutValues(truth);
+  search.substeps = 1;
 }
 
 Model withoutValues(Model model) {

@@ -66,6 +66,17 @@ struct SmallObjectFixture {
   std::vector<double> true_values;
 };
 
+/// A stiff scene integrated at one substep per frame: paper_object at omega h = 2.5 (semi-implicit
+/// Euler's stable range ends at 2), the data (60 frames) from 20 substeps with 0.1 mm noise, the
+/// model to search at 1 substep. The one-step cost predicts one frame at a time and stays usable;
+/// the output error's rollouts over 10-frame segments blow up.
+struct StiffAtOneSubstep {
+  StiffAtOneSubstep();
+  Model truth;
+  Trajectory data;
+  Model search;  ///< truth without values, 1 substep
+};
+
 /// Largest |a_k - truth_k| / |truth_k|.
 double maxRelativeError(const std::vector<double>& a, const std::vector<double>& truth);
 

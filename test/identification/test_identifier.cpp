@@ -32,25 +32,7 @@ bool anyNote(const mme::IdentifyResult& r, const std::string& text) {
   return false;
 }
 
-// A stiff scene integrated at one substep per frame: paper_object at omega h = 2.5 (semi-implicit
-// Euler's stable range ends at 2), the data from 20 substeps with 0.1 mm noise, the model at 1.
-// The one-step cost predicts one frame at a time and stays usable; the output error's rollouts
-// over 10-frame segments blow up.
-struct StiffAtOneSubstep {
-  mme::Model truth = mme::makeScene("paper_object").model;
-  mme::Trajectory data;
-  mme::Model search;
-  StiffAtOneSubstep() {
-    std::vector<Eigen::Vector3d> x;
-    for (const mme::Particle& p : truth.particles) x.push_back(p.position_m);
-    truth.frame_rate_hz = mme::stiffestModeRadPerS(truth, x) / 2.5;
-    truth.substeps = 20;
-    data = mme::simulateTrajectory(truth, 60, truth.frame_rate_hz);
-    mme::addGaussianNoise(&data, 1e-4, 7);
-    search = mme::test::withoutValues(truth);
-    search.substeps = 1;
-  }
-};
+using mme::test::StiffAtOneSubstep;
 
 // With the model's integrator kept (no substep trial) the output error's answer predicts 10
 // frames ahead far worse than the one-step answer it would replace: the identification ends with

@@ -122,15 +122,9 @@ TEST(IdentifyPipeline, TheModelStartsAtTheFirstFrame) {
 // up over its segments. The file written holds the one-step answer, which predicts better, and
 // its notes carry the warning; the output error's answer is nowhere in it.
 TEST(IdentifyPipeline, TheFileHoldsTheBetterAnswerWhenTheOutputErrorBlowsUp) {
-  mme::Model truth = mme::makeScene("paper_object").model;
-  std::vector<Eigen::Vector3d> x;
-  for (const mme::Particle& p : truth.particles) x.push_back(p.position_m);
-  truth.frame_rate_hz = mme::stiffestModeRadPerS(truth, x) / 2.5;
-  truth.substeps = 20;
-  mme::Trajectory data = mme::simulateTrajectory(truth, 60, truth.frame_rate_hz);
-  mme::addGaussianNoise(&data, 1e-4, 7);
-  mme::Model search = mme::test::withoutValues(truth);
-  search.substeps = 1;
+  const mme::test::StiffAtOneSubstep stiff;
+  const mme::Trajectory& data = stiff.data;
+  const mme::Model& search = stiff.search;
   mme::PipelineOptions o;
   o.identify.es.threads = 1;
   o.identify.estimate_std = false;

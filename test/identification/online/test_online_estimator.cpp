@@ -109,15 +109,9 @@ TEST(OnlineEstimator, OnAStillWindowTheEstimateMatchesTheOfflineIdentification) 
 // with 0.1 mm noise): the output-error fits beside the generations blow up over their segments.
 // None is published: the estimate stays the one-step answer and counts the fits not adopted.
 TEST(OnlineEstimator, AnOutputErrorFitThatPredictsWorseIsNotPublished) {
-  mme::Model truth = mme::makeScene("paper_object").model;
-  std::vector<Eigen::Vector3d> x;
-  for (const mme::Particle& p : truth.particles) x.push_back(p.position_m);
-  truth.frame_rate_hz = mme::stiffestModeRadPerS(truth, x) / 2.5;
-  truth.substeps = 20;
-  mme::Trajectory data = mme::simulateTrajectory(truth, 60, truth.frame_rate_hz);
-  mme::addGaussianNoise(&data, 1e-4, 7);
-  mme::Model search = mme::test::withoutValues(truth);
-  search.substeps = 1;
+  const mme::test::StiffAtOneSubstep stiff;
+  const mme::Trajectory& data = stiff.data;
+  const mme::Model& search = stiff.search;
   mme::OnlineEstimatorOptions options;
   options.window_frames = 60;
   options.cost = mme::CostChoice::kOutputError;
