@@ -58,8 +58,8 @@ EvolutionStrategy::EvolutionStrategy(ParameterSpace space, const EsOptions& opti
   const std::string bad = validateOptions(options_);
   if (!bad.empty()) throw InputError("evolution strategy: " + bad);
   if (space_.size() == 0) throw InputError("the model has no free parameter to identify");
-  operator_counts_.assign(7, 0);
-  operator_successes_.assign(7, 0);
+  operator_counts_.assign(static_cast<size_t>(Operator::kCount), 0);
+  operator_successes_.assign(static_cast<size_t>(Operator::kCount), 0);
 }
 
 void EvolutionStrategy::setCost(std::shared_ptr<const Cost> cost) {
@@ -420,6 +420,57 @@ bool EvolutionStrategy::offer(const std::vector<double>& genes) {
   *worst = std::move(one[0]);
   if (new_best) best_index_ = static_cast<int>(worst - population_.begin());
   return new_best;
+}
+
+std::vector<Individual> EvolutionStrategy::emigrants(int count) const {
+  std::vector<int> order(population_.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [this](int a, int b) {
+    return population_[a].cost < population_[b].cost;
+  });
+  const size_t n = std::min(order.size(), static_cast<size_t>(std::max(count, 0)));
+  std::vector<Individual> out;
+  out.reserve(n);
+  for (size_t i = 0; i < n; ++i) out.push_back(population_[order[i]]);
+  return out;
+}
+
+int EvolutionStrategy::immigrate(std::vector<Individual> arrivals) {
+  const size_t n = space_.size();
+  for (const Individual& arrival : arrivals) {
+    if (arrival.genes.size() != n || arrival.mutability.size() != n)
+      throw InputError("immigrant has " + std::to_string(arrival.genes.size()) + " genes and " +
+                       std::to_string(arrival.mutability.size()) + " mutabilities; the space has " +
+                       std::to_string(n));
+  }
+  if (population_.empty() || arrivals.empty()) return 0;
+  for (Individual& arrival : arrivals) {
+    for (size_t k = 0; k < n; ++k) {
+      const Gene& g = space_.gene(k);
+      arrival.genes[k] = space_.reflect(k, arrival.genes[k]);
+      const double m = arrival.mutability[k];
+      arrival.mutability[k] = std::isfinite(m) && m > 0.0 ? std::min(m, g.upper - g.lower)
+                                                          : initialMutability(k);
+    }
+  }
+  evaluate(&arrivals);
+  operator_counts_[static_cast<int>(Operator::kImmigrant)] += arrivals.size();
+  int entered = 0;
+  for (Individual& arrival : arrivals) {
+    auto worst = std::max_element(population_.begin(), population_.end(),
+                                  [](const Individual& a, const Individual& b) {
+                                    return a.cost < b.cost;
+                                  });
+    if (!(arrival.cost < worst->cost)) continue;
+    *worst = std::move(arrival);
+    ++entered;
+  }
+  operator_successes_[static_cast<int>(Operator::kImmigrant)] += entered;
+  best_index_ = static_cast<int>(std::min_element(population_.begin(), population_.end(),
+                                                  [](const Individual& a, const Individual& b) {
+                                                    return a.cost < b.cost;
+                                                  }) - population_.begin());
+  return entered;
 }
 
 void EvolutionStrategy::step() {

@@ -4,8 +4,10 @@
 
 #include <chrono>
 #include <cmath>
+#include <algorithm>
 #include <memory>
 
+#include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/short_term_cost.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/identification/search/evolution_strategy.h"
@@ -190,6 +192,59 @@ TEST(EvolutionStrategy, WarmStartKeepsThePopulationOnANewWindow) {
   double err_before = maxRelativeError(es.space().toPhysical(before), f.true_values);
   double err_after = maxRelativeError(es.bestValues(), f.true_values);
   EXPECT_LT(err_after, std::max(0.5, 10 * err_before));
+}
+
+// Island model: a strong island's emigrants enter a weak island's population in place of its
+// worst individuals (re-evaluated there), a worse arrival changes nothing, and an arrival of
+// the wrong size is refused with a reason.
+TEST(EvolutionStrategy, ImmigrantsReplaceTheWorstOnlyWhenBetter) {
+  Fixture f;
+  mme::EsOptions options;
+  options.population = 20;
+  options.offspring = 20;
+  options.refine_period = 0;
+  mme::EvolutionStrategy strong(mme::ParameterSpace(f.search, f.data), options);
+  strong.setCost(f.cost);
+  for (int g = 0; g < 40; ++g) strong.step();
+  options.seed = 7;
+  mme::EvolutionStrategy weak(mme::ParameterSpace(f.search, f.data), options);
+  weak.setCost(f.cost);
+  weak.step();
+  ASSERT_LT(strong.best().cost, weak.best().cost);
+
+  const std::vector<mme::Individual> out = strong.emigrants(3);
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_EQ(out[0].genes, strong.best().genes);
+  EXPECT_LE(out[0].cost, out[1].cost);
+  EXPECT_LE(out[1].cost, out[2].cost);
+
+  std::vector<mme::Individual> arrivals = out;
+  for (mme::Individual& a : arrivals) a.cost = 0.0;  // the sender's cost is not trusted
+  const double worst_before = std::max_element(weak.population().begin(), weak.population().end(),
+      [](const mme::Individual& a, const mme::Individual& b) { return a.cost < b.cost; })->cost;
+  EXPECT_EQ(weak.immigrate(arrivals), 3);
+  EXPECT_EQ(weak.population().size(), 20u);
+  EXPECT_EQ(weak.best().genes, strong.best().genes);
+  std::vector<double> local;
+  EXPECT_DOUBLE_EQ(weak.best().cost,
+                   f.cost->evaluate(weak.space().toPhysical(weak.best().genes), &local));
+  EXPECT_LT(weak.best().cost, worst_before);
+  EXPECT_EQ(weak.operatorSuccesses()[static_cast<int>(mme::Operator::kImmigrant)], 3u);
+
+  // The strong island's population is all better than a fresh random individual.
+  std::vector<mme::Individual> poor{weak.makeRandom()};
+  const std::vector<mme::Individual> strong_before = strong.population();
+  strong.immigrate(poor);
+  const double strong_worst = std::max_element(strong_before.begin(), strong_before.end(),
+      [](const mme::Individual& a, const mme::Individual& b) { return a.cost < b.cost; })->cost;
+  if (poor[0].cost >= strong_worst) {
+    for (size_t i = 0; i < strong_before.size(); ++i)
+      EXPECT_EQ(strong.population()[i].genes, strong_before[i].genes);
+  }
+
+  std::vector<mme::Individual> wrong{out[0]};
+  wrong[0].genes.pop_back();
+  EXPECT_THROW(weak.immigrate(wrong), mme::InputError);
 }
 
 // The engine with the Levenberg-Marquardt refinement from generation 5 identifies the small

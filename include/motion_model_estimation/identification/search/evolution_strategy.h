@@ -72,7 +72,11 @@ struct Individual {
 };
 
 /// Which operator made a child (for statistics and tests).
-enum class Operator { kInitial, kNew, kPartlyNew, kReplica, kPartialReplica, kCrossover, kRefine };
+enum class Operator {
+  kInitial, kNew, kPartlyNew, kReplica, kPartialReplica, kCrossover, kRefine,
+  kImmigrant,  ///< arrived from another island (immigrate())
+  kCount       ///< number of operators (size of the per-operator counters)
+};
 
 class EvolutionStrategy {
  public:
@@ -99,6 +103,16 @@ class EvolutionStrategy {
   /// window): evaluated on the current cost, it replaces the worst individual when better than
   /// it. Returns true when it became the best.
   bool offer(const std::vector<double>& genes);
+  /// Island model: copies of the `count` best individuals (best first; fewer when the
+  /// population is smaller, none before the first step), to send to other islands.
+  std::vector<Individual> emigrants(int count) const;
+  /// Island model: individuals from another island (genes and mutabilities in this space's
+  /// order; their cost is the sender's and is not trusted). Each is reflected into the bounds,
+  /// re-evaluated on this strategy's cost and takes the place of the worst individual when it is
+  /// better than it, so the elite never gives way to a worse one. Returns how many entered.
+  /// Throws InputError when an individual's genes or mutabilities do not match the space.
+  /// Ignored (returns 0) before the first step.
+  int immigrate(std::vector<Individual> arrivals);
   /// A refinement running past this time stops there (keeping its best point); default: none.
   void setDeadline(std::chrono::steady_clock::time_point deadline) { deadline_ = deadline; }
   /// A refinement stops (keeping its best point) once `cancel` is raised; default: none.
