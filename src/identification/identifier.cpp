@@ -21,6 +21,8 @@ namespace mme {
 std::string validateOptions(const IdentifyOptions& o) {
   const std::string es = validateOptions(o.es);
   if (!es.empty()) return es;
+  const std::string islands = validateOptions(o.islands);
+  if (!islands.empty()) return islands;
   if (o.generations < 1) return "generations must be >= 1";
   if (!(o.target_cost >= 0.0)) return "target_cost must be >= 0";
   if (!(o.max_wall_time_s >= 0.0)) return "max_wall_time_s must be >= 0";
@@ -334,6 +336,7 @@ class Identification {
       const bool at_default_bound = runGenerations();
       generations_done_ += es_->generation();
       evaluations_done_ += es_->evaluations();
+      countIslands();
       if (stop_ == IdentifyStop::kTargetCost || stop_ == IdentifyStop::kWallTime ||
           stop_ == IdentifyStop::kCancelled ||
           widenings_ >= options_.max_bound_widenings || generations_done_ >= options_.generations)
@@ -352,7 +355,7 @@ class Identification {
     // Converged: over the last `patience` generations the best cost fell by less than a
     // relative kPatienceShare, or it sits at the round-off floor.
     const double floor_m2 = 1e-26 * static_cast<double>(cost_->residualCount());
-    es_ = std::make_unique<EvolutionStrategy>(*space_, options_.es);
+    es_ = std::make_unique<IslandModel>(*space_, options_.es, options_.islands);
     es_->setCost(cost_);
     es_->setSeeds(seeds_);
     if (options_.max_wall_time_s > 0.0)
@@ -415,6 +418,18 @@ class Identification {
     return patience > 0 && es_->refinements() > 0 &&
            (best <= floor_m2 || (g > static_cast<size_t>(patience) &&
                                  best_after[g - 1 - patience] - best <= kPatienceShare * best_after[g - 1 - patience]));
+  }
+
+  /// Adds the last search's per-island evaluations and accepted immigrants to the run's.
+  void countIslands() {
+    const size_t n = static_cast<size_t>(es_->islandCount());
+    island_evaluations_.resize(n, 0);
+    island_accepted_.resize(n, 0);
+    for (size_t i = 0; i < n; ++i) {
+      island_evaluations_[i] += es_->island(static_cast<int>(i)).evaluations();
+      island_accepted_[i] += es_->immigrantsAccepted(static_cast<int>(i));
+    }
+    migrations_ += es_->migrations();
   }
 
   /// Widens every default bound `best` presses on by kWidenFactor, and says so.
@@ -514,6 +529,10 @@ class Identification {
     r_.stop = time_cut_ ? IdentifyStop::kWallTime : stop_;
     r_.last_refine_status = es_ ? es_->lastRefineStatus() : RefineStatus::kNotRun;
     r_.bound_widenings = widenings_;
+    r_.island_evaluations = island_evaluations_;
+    r_.island_immigrants_accepted = island_accepted_;
+    r_.migrations = migrations_;
+    r_.best_island = es_ ? es_->bestIsland() : 0;
     r_.substeps = model_.substeps;
     r_.stiffest_omega_h = omega_h_;
     r_.notes = notes_;
@@ -546,7 +565,9 @@ class Identification {
   int generations_done_ = 0;
   uint64_t evaluations_done_ = 0;
   int widenings_ = 0;
-  std::unique_ptr<EvolutionStrategy> es_;
+  std::unique_ptr<IslandModel> es_;  ///< one island: the plain evolution strategy
+  std::vector<uint64_t> island_evaluations_, island_accepted_;  ///< summed over the searches
+  int migrations_ = 0;
   std::vector<double> best_genes_;
   std::vector<Eigen::Vector3d> reference_;
   double omega_h_ = 0.0;

@@ -49,7 +49,12 @@ inline CliSpec identifyCliSpec() {
          "Wall-time limit [s] of the structure selection (all its levels) and then of the "
          "passive identification; a cut selection keeps the best level judged so far."},
         {"seed", "S", "1", "Random seed: the same seed, input and --threads give the same result."},
-        {"threads", "T", "1", "Threads evaluating the population."}}},
+        {"threads", "T", "1", "Threads evaluating the population (with --islands: shared by the islands)."},
+        {"islands", "N", "1",
+         "Island model: N populations of --population each, own seeds, stepping in lock-step in "
+         "this process (threads, deterministic); the best island's best is the answer."},
+        {"migration-period", "G", "10", "Islands: generations between migrations."},
+        {"migrants", "K", "2", "Islands: best individuals each island sends to the next per migration."}}},
       {"Cost and refinement",
        {{"cost", "NAME", "auto (paper: short_term)",
          "auto: the output error when the markers look noisy, else the one-step cost; "

@@ -69,6 +69,13 @@ void parseSearchOptions(const mme::CliArgs& args, Command* c) {
   options.es.offspring = options.es.population;
   options.es.seed = static_cast<uint64_t>(args.getInt("seed", 1, 0, 0x7fffffffL));
   options.es.threads = static_cast<int>(args.getInt("threads", 1, 1, 256));
+  options.islands.islands = static_cast<int>(args.getInt("islands", 1, 1, 1024));
+  if (options.islands.islands == 1 && (args.has("migration-period") || args.has("migrants")))
+    throw mme::InputError("--migration-period and --migrants need --islands N with N >= 2");
+  options.islands.migration_period_generations = static_cast<int>(
+      args.getInt("migration-period", options.islands.migration_period_generations, 1, 100000000));
+  options.islands.migrants = static_cast<int>(
+      args.getInt("migrants", options.islands.migrants, 1, options.es.population));
   if (args.has("refine") && !mme::parseRefineAlgorithm(args.get("refine"), &options.es.refine_algorithm))
     throw mme::InputError("--refine '" + args.get("refine") + "' is unknown (available: " +
                           mme::refineAlgorithmNames() + ")");
@@ -408,6 +415,11 @@ void connectOutput(Command* c, Heartbeat* heartbeat) {
                 mme::freeParameters(model).size(), o.es.population, mme::presetName(command->preset),
                 mme::refineAlgorithmName(o.es.refine_algorithm), o.es.refine_start_generation,
                 o.es.refine_period);
+    if (o.islands.islands > 1)
+      std::printf("identify: %d islands of population %d in this process (migration every %d "
+                  "generations, %d migrant(s) each, %s)\n",
+                  o.islands.islands, o.es.population, o.islands.migration_period_generations,
+                  o.islands.migrants, mme::migrationTopologyName(o.islands.topology));
     heartbeat->printed("the passive identification");
   };
   p.passive_identified = [command, heartbeat](const mme::PipelineResult& result) {
@@ -469,6 +481,14 @@ void printSummary(const mme::IdentifyResult& r, const Command& c) {
   std::printf("global cost %.6e m^2 over %d frames, %d generations, %llu evaluations, %.2f s\n",
               r.global_cost, r.frames, r.generations,
               static_cast<unsigned long long>(r.evaluations), r.wall_time_s);
+  if (r.island_evaluations.size() > 1) {
+    std::printf("islands: %zu, %d migration(s), best island %d; per island evaluations "
+                "(immigrants accepted):", r.island_evaluations.size(), r.migrations, r.best_island);
+    for (size_t i = 0; i < r.island_evaluations.size(); ++i)
+      std::printf(" %llu (%llu)", static_cast<unsigned long long>(r.island_evaluations[i]),
+                  static_cast<unsigned long long>(r.island_immigrants_accepted[i]));
+    std::printf("\n");
+  }
   std::printf("estimator: %s (--cost %s; marker noise estimated from the data %.3g m%s), %d "
               "substep(s) per frame (stiffest mode omega*h %.3g)\n",
               mme::estimatorName(r.estimator), mme::costChoiceName(options.cost), r.noise_estimate_m,

@@ -12,6 +12,7 @@
 #include "motion_model_estimation/core/model.h"
 #include "motion_model_estimation/core/trajectory.h"
 #include "motion_model_estimation/identification/search/evolution_strategy.h"
+#include "motion_model_estimation/identification/search/island_model.h"
 #include "motion_model_estimation/identification/estimators/estimator_kind.h"
 #include "motion_model_estimation/identification/estimators/output_error.h"
 
@@ -29,6 +30,10 @@ const char* costChoiceName(CostChoice choice);
 
 struct IdentifyOptions {
   EsOptions es;
+  /// Islands (island_model.h): islands = 1 is the single evolution strategy; with more, each
+  /// island runs `es` (population, offspring) with its own seed, and `es.threads` is shared out
+  /// among them. The generation budget and the stop rules count lock-step generations.
+  IslandOptions islands;
   CostChoice cost = CostChoice::kAuto;
   /// kAuto: the output-error estimator runs when estimateMarkerNoise() is at least this [m]
   /// (below it the one-step cost is exact to within what matters, and faster).
@@ -100,6 +105,12 @@ struct IdentifyResult {
   IdentifyStop stop = IdentifyStop::kGenerations;
   RefineStatus last_refine_status = RefineStatus::kNotRun;  ///< how the last refinement ended
   int bound_widenings = 0;           ///< searches resumed after widening default bounds
+  /// Per island (one entry per island; one for the single evolution strategy): its cost
+  /// evaluations (immigrants' re-evaluations included) and the immigrants it let in.
+  std::vector<uint64_t> island_evaluations;
+  std::vector<uint64_t> island_immigrants_accepted;
+  int migrations = 0;                ///< migrations done (every island sending once)
+  int best_island = 0;               ///< the island whose best is the search's answer
   std::vector<std::string> notes;    ///< what happened on the way (widened bounds, ...)
   Estimator estimator = Estimator::kShortTerm;  ///< the cost of the final answer
   double noise_estimate_m = 0.0;     ///< estimateMarkerNoise() of the data

@@ -1,0 +1,101 @@
+// The island model: several evolution strategies (islands) on the same cost, each with its own
+// seed, stepping in lock-step and every few generations passing their best individuals
+// (emigrants) to other islands, which let them compete for the places of their worst. Separate
+// populations settle in different basins (e.g. different threshold intervals of conditional
+// bonds) and migration spreads the best basin's individuals. Offline islands are threads of one
+// process; islands on several hosts are the online node's.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "motion_model_estimation/core/cost.h"
+#include "motion_model_estimation/core/thread_pool.h"
+#include "motion_model_estimation/identification/search/evolution_strategy.h"
+#include "motion_model_estimation/identification/search/parameter_space.h"
+
+namespace mme {
+
+/// Where an island's emigrants go.
+enum class MigrationTopology {
+  kRing,       ///< to the next island only (island i -> i + 1, the last -> the first)
+  kBroadcast,  ///< to every other island
+};
+/// "ring" | "broadcast" -> the enum; false when unknown.
+bool parseMigrationTopology(const std::string& name, MigrationTopology* topology);
+const char* migrationTopologyName(MigrationTopology topology);
+
+struct IslandOptions {
+  int islands = 1;                        ///< populations; 1 = the single evolution strategy
+  int migration_period_generations = 10;  ///< generations between migrations
+  int migrants = 2;                       ///< best individuals each island sends per migration
+  /// The ring: on the conditional objects broadcasting let one island's basin take every
+  /// population within a migration or two, which lost the diversity the islands are for
+  /// (docs/bench/islands.md).
+  MigrationTopology topology = MigrationTopology::kRing;
+};
+
+/// Empty string when the options are usable, else the reason naming the option.
+std::string validateOptions(const IslandOptions& options);
+
+/// The seed of island `island` of a run seeded `run_seed`: island 0 keeps the run's seed (so one
+/// island is the plain evolution strategy), the others' are drawn from (run seed, index).
+uint64_t islandSeed(uint64_t run_seed, int island);
+
+class IslandModel {
+ public:
+  /// `es.threads` is the run's thread count: with several islands they step on up to that many
+  /// threads at once, each island evaluating its children on its share of the rest. The result
+  /// does not depend on it.
+  IslandModel(const ParameterSpace& space, const EsOptions& es, const IslandOptions& islands);
+
+  /// The cost every island minimises (see EvolutionStrategy::setCost).
+  void setCost(std::shared_ptr<const Cost> cost);
+  /// Individuals every island's first population holds (see EvolutionStrategy::setSeeds).
+  void setSeeds(const std::vector<std::vector<double>>& seeds);
+  void setDeadline(std::chrono::steady_clock::time_point deadline);
+  void setCancel(const std::atomic<bool>* cancel);
+
+  /// One generation on every island (its refinement included when due), then, every
+  /// migration_period_generations, a migration at the barrier in island order.
+  void step();
+
+  int islandCount() const { return static_cast<int>(islands_.size()); }
+  const EvolutionStrategy& island(int i) const { return *islands_[static_cast<size_t>(i)]; }
+  /// One island, e.g. to offer it an individual found elsewhere (EvolutionStrategy::offer).
+  EvolutionStrategy& island(int i) { return *islands_[static_cast<size_t>(i)]; }
+  /// The island holding the best individual (the lowest index among equal costs).
+  int bestIsland() const;
+  const Individual& best() const { return island(bestIsland()).best(); }
+  std::vector<double> bestValues() const { return island(bestIsland()).bestValues(); }
+  /// Generations of each island (lock-step: all the same).
+  int generation() const { return islands_.front()->generation(); }
+  /// Cost evaluations of all islands, the immigrants' re-evaluations included.
+  uint64_t evaluations() const;
+  /// Refinements run by all islands.
+  int refinements() const;
+  /// How the best island's last refinement ended.
+  RefineStatus lastRefineStatus() const { return island(bestIsland()).lastRefineStatus(); }
+  /// Migrations done (each moves every island's emigrants once).
+  int migrations() const { return migrations_; }
+  /// Immigrants island i let into its population so far.
+  uint64_t immigrantsAccepted(int i) const { return accepted_[static_cast<size_t>(i)]; }
+
+ private:
+  void migrate();
+  /// Calls body(i) for every island, on the island pool when there is one.
+  void forEachIsland(const std::function<void(size_t)>& body);
+
+  IslandOptions options_;
+  std::vector<std::unique_ptr<EvolutionStrategy>> islands_;
+  std::unique_ptr<ThreadPool> pool_;  ///< steps islands side by side (null: one at a time)
+  std::vector<uint64_t> accepted_;
+  int migrations_ = 0;
+};
+
+}  // namespace mme

@@ -1,0 +1,155 @@
+// The island model: one island is the plain evolution strategy, the result does not depend on
+// the thread count, migration carries a good individual along the ring, bad options are refused,
+// and on cable objects (several threshold intervals: several local minima) three islands beat
+// one population of the same evaluations per generation.
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/short_term_cost.h"
+#include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/identification/search/island_model.h"
+#include "motion_model_estimation/scenes/random_object.h"
+#include "test_helpers.h"
+
+namespace {
+
+using Fixture = mme::test::SmallObjectFixture;
+
+mme::EsOptions smallEs() {
+  mme::EsOptions o;
+  o.population = 20;
+  o.offspring = 20;
+  o.seed = 3;
+  return o;
+}
+
+TEST(IslandModel, OneIslandIsTheEvolutionStrategyBitForBit) {
+  Fixture f;
+  const mme::ParameterSpace space(f.search, f.data);
+  mme::EvolutionStrategy es(space, smallEs());
+  mme::IslandModel islands(space, smallEs(), mme::IslandOptions{});
+  es.setCost(f.cost);
+  islands.setCost(f.cost);
+  for (int g = 0; g < 12; ++g) {  // refinements at 5 and 10 included
+    es.step();
+    islands.step();
+  }
+  ASSERT_EQ(islands.islandCount(), 1);
+  EXPECT_EQ(islands.evaluations(), es.evaluations());
+  EXPECT_EQ(islands.refinements(), es.refinements());
+  ASSERT_EQ(islands.island(0).population().size(), es.population().size());
+  for (size_t i = 0; i < es.population().size(); ++i) {
+    EXPECT_EQ(islands.island(0).population()[i].genes, es.population()[i].genes);
+    EXPECT_EQ(islands.island(0).population()[i].cost, es.population()[i].cost);
+  }
+  EXPECT_EQ(islands.migrations(), 0);
+}
+
+TEST(IslandModel, IslandSeedsDifferAndTheFirstIsTheRunsSeed) {
+  EXPECT_EQ(mme::islandSeed(42, 0), 42u);
+  EXPECT_NE(mme::islandSeed(42, 1), mme::islandSeed(42, 2));
+  EXPECT_NE(mme::islandSeed(42, 1), mme::islandSeed(43, 1));
+  EXPECT_NE(mme::islandSeed(42, 1), 42u);
+}
+
+TEST(IslandModel, SameSeedAndIslandsGiveTheSameResultOnOneAndTwoThreads) {
+  Fixture f;
+  mme::IdentifyOptions o;
+  o.generations = 40;
+  o.es.population = 20;
+  o.es.offspring = 20;
+  o.islands.islands = 3;
+  o.islands.migration_period_generations = 4;
+  o.estimate_std = false;
+  o.es.threads = 1;
+  const mme::IdentifyResult one = mme::identifyModel(f.search, f.data, o);
+  o.es.threads = 2;
+  const mme::IdentifyResult two = mme::identifyModel(f.search, f.data, o);
+  EXPECT_EQ(one.values, two.values);
+  EXPECT_EQ(one.global_cost, two.global_cost);
+  EXPECT_EQ(one.evaluations, two.evaluations);
+  EXPECT_EQ(one.island_evaluations, two.island_evaluations);
+  EXPECT_EQ(one.island_immigrants_accepted, two.island_immigrants_accepted);
+  EXPECT_EQ(one.best_island, two.best_island);
+  ASSERT_EQ(one.island_evaluations.size(), 3u);
+  EXPECT_GT(one.migrations, 0);
+  uint64_t sum = 0;
+  for (uint64_t e : one.island_evaluations) sum += e;
+  EXPECT_EQ(sum, one.evaluations);
+}
+
+TEST(IslandModel, OneIslandIdentifiesExactlyAsWithoutIslands) {
+  Fixture f;
+  mme::IdentifyOptions o;
+  o.generations = 30;
+  o.es.population = 20;
+  o.es.offspring = 20;
+  o.estimate_std = false;
+  const mme::IdentifyResult plain = mme::identifyModel(f.search, f.data, o);
+  o.islands.migration_period_generations = 3;  // no migration with one island
+  const mme::IdentifyResult one = mme::identifyModel(f.search, f.data, o);
+  EXPECT_EQ(plain.values, one.values);
+  EXPECT_EQ(plain.evaluations, one.evaluations);
+  ASSERT_EQ(one.island_evaluations.size(), 1u);
+  EXPECT_EQ(one.island_evaluations[0], one.evaluations);
+  EXPECT_EQ(one.migrations, 0);
+}
+
+// An individual only island 0 has (the truth, offered to it) reaches island 1 at the next
+// migration and not island 2 (the ring sends to the next island only); broadcast reaches both.
+TEST(IslandModel, MigrationCarriesAGoodIndividualToTheNextIsland) {
+  Fixture f;
+  const mme::ParameterSpace space(f.search, f.data);
+  const std::vector<double> truth = space.toSearch(f.true_values);
+  for (mme::MigrationTopology topology : {mme::MigrationTopology::kRing, mme::MigrationTopology::kBroadcast}) {
+    mme::EsOptions es = smallEs();
+    es.refine_period = 0;  // nothing but migration brings an island the truth
+    mme::IslandOptions io;
+    io.islands = 3;
+    io.migration_period_generations = 2;
+    io.migrants = 1;
+    io.topology = topology;
+    mme::IslandModel islands(space, es, io);
+    islands.setCost(f.cost);
+    islands.step();
+    ASSERT_TRUE(islands.island(0).offer(truth));
+    for (int i = 1; i < 3; ++i) ASSERT_NE(islands.island(i).best().genes, truth);
+    islands.step();  // generation 2: migration
+    EXPECT_EQ(islands.migrations(), 1);
+    EXPECT_EQ(islands.island(1).best().genes, truth) << mme::migrationTopologyName(topology);
+    EXPECT_GE(islands.immigrantsAccepted(1), 1u);
+    if (topology == mme::MigrationTopology::kRing)
+      EXPECT_NE(islands.island(2).best().genes, truth);
+    else
+      EXPECT_EQ(islands.island(2).best().genes, truth);
+    EXPECT_EQ(islands.bestIsland(), 0);  // the lowest index among equal costs
+  }
+}
+
+TEST(IslandModel, BadOptionsAreRefusedWithTheirName) {
+  mme::IslandOptions o;
+  EXPECT_EQ(mme::validateOptions(o), "");
+  o.islands = 0;
+  EXPECT_NE(mme::validateOptions(o).find("islands"), std::string::npos);
+  o = mme::IslandOptions{};
+  o.migration_period_generations = 0;
+  EXPECT_NE(mme::validateOptions(o).find("migration_period_generations"), std::string::npos);
+  o = mme::IslandOptions{};
+  o.migrants = -1;
+  EXPECT_NE(mme::validateOptions(o).find("migrants"), std::string::npos);
+  Fixture f;
+  mme::IdentifyOptions io;
+  io.islands.islands = 0;
+  EXPECT_THROW(mme::identifyModel(f.search, f.data, io), mme::InputError);
+  mme::MigrationTopology t;
+  EXPECT_TRUE(mme::parseMigrationTopology("broadcast", &t));
+  EXPECT_EQ(t, mme::MigrationTopology::kBroadcast);
+  EXPECT_FALSE(mme::parseMigrationTopology("star", &t));
+}
+
+}  // namespace
