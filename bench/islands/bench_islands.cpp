@@ -9,10 +9,9 @@
 //                          parameter within 1 %) with 1, 2 and 4 islands on up to 2 threads,
 //                          and the evaluation throughput per island
 //   islands_map.png, islands_scaling.png (gnuplot, bench/islands/charts.gp), islands.md
-// The methods of the map: `default` (identify with no option, bench/peers/methods.h), `islands`
-// (the same with 3 islands of a third of the population each, ring migration: the same
-// evaluations per generation and the same budget), `islands_broadcast` (the same, migrants to
-// every island) and, with --sade, pagmo2's SADE as bench_peers runs it (oracle stop at 1 %).
+// The methods of the map: `default` (identify with no option, bench/peers/methods.h), the
+// island variants of islandVariant() below and, with --sade, pagmo2's SADE as bench_peers runs
+// it (oracle stop at 1 %).
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -40,6 +39,8 @@ struct Options {
   bool sade = false;
   bool quick = false;
   std::string only;  ///< map,scaling (empty = both)
+  std::vector<std::string> methods;  ///< map: these methods (empty = all but sade)
+  std::vector<int> cables;           ///< map: these cable-type counts (empty = 2, 5, 10)
   bool wants(const std::string& part) const {
     return only.empty() || ("," + only + ",").find("," + part + ",") != std::string::npos;
   }
@@ -54,16 +55,15 @@ constexpr int kDefaultPopulation = 100;
 /// identify's default engine with `islands` islands of `population` each on `threads` threads,
 /// the budget's evaluations as lock-step generations. With `stop_at_1pct` the run is cancelled
 /// the first time its best is within 1 % everywhere (time to target). Judged on the final answer.
-RunResult runIslands(const Problem& p, uint64_t seed, const Budget& budget, int islands,
-                     int population, mme::MigrationTopology topology, int threads, bool stop_at_1pct) {
+RunResult runIslands(const Problem& p, uint64_t seed, const Budget& budget, const mme::IslandOptions& io,
+                     int population, int threads, bool stop_at_1pct) {
   RunResult r;
-  r.method = islands == 1 ? "default" : topology == mme::MigrationTopology::kRing ? "islands" : "islands_broadcast";
+  const int islands = io.islands;
   mme::IdentifyOptions o = mme::identifyOptionsFor(mme::Preset::kDefault);
   o.es.seed = seed;
   o.es.threads = threads;
   o.es.population = o.es.offspring = population;
-  o.islands.islands = islands;
-  o.islands.topology = topology;
+  o.islands = io;
   o.max_wall_time_s = budget.max_wall_s;
   o.generations = static_cast<int>(std::max<uint64_t>(1, budget.max_evaluations / static_cast<uint64_t>(islands * population)));
   std::atomic<bool> cancel{false};
@@ -116,13 +116,44 @@ bool inTheTruthsIntervals(const Problem& p, const std::vector<double>& values) {
   return true;
 }
 
+/// An island setting of the map: the islands' options and each island's population.
+struct IslandVariant {
+  mme::IslandOptions options;
+  int population;
+};
+
+/// The map's island methods: `islands` (`identify --islands 3`: 3 islands of population 100,
+/// broadcast migration), `islands_ring` and `islands_alone` (the same with ring migration or
+/// none), `islands_third` (3 islands of 34: the default's evaluations per generation) and
+/// `one_300` (one population of 300: the islands' evaluations per generation in one population).
+bool islandVariant(const std::string& method, IslandVariant* v) {
+  v->options = mme::IslandOptions{};
+  v->options.islands = kMapIslands;
+  v->population = kDefaultPopulation;
+  if (method == "islands") return true;
+  if (method == "islands_ring") v->options.topology = mme::MigrationTopology::kRing;
+  else if (method == "islands_alone") v->options.migrants = 0;
+  else if (method == "islands_third") v->population = (kDefaultPopulation + kMapIslands - 1) / kMapIslands;
+  else if (method == "one_300") {
+    v->options.islands = 1;
+    v->population = kMapIslands * kDefaultPopulation;
+  } else {
+    return false;
+  }
+  return true;
+}
+
 /// (map) cables 2, 5, 10 x seeds x methods on the worker pool; islands_map_runs.csv.
 std::vector<MapRun> runMap(const Options& s) {
-  const std::vector<int> cables = s.quick ? std::vector<int>{5} : std::vector<int>{2, 5, 10};
-  std::vector<std::string> methods{"default", "islands", "islands_broadcast"};
-  if (s.sade) {
-    if (!bench::methodAvailable("sade")) throw mme::InputError("--sade: built without pagmo2 (libpagmo-dev)");
-    methods.push_back("sade");
+  const std::vector<int> cables = s.cables.empty() ? std::vector<int>{2, 5, 10} : s.cables;
+  std::vector<std::string> methods = s.methods;
+  if (methods.empty()) methods = {"default", "one_300", "islands", "islands_ring", "islands_alone", "islands_third"};
+  if (s.sade) methods.push_back("sade");
+  for (const std::string& m : methods) {
+    IslandVariant v;
+    if (m != "default" && m != "sade" && !islandVariant(m, &v)) throw mme::InputError("--methods: unknown '" + m + "'");
+    if (m == "sade" && !bench::methodAvailable("sade"))
+      throw mme::InputError("sade: built without pagmo2 (libpagmo-dev)");
   }
   std::vector<MapRun> runs;
   for (int c : cables)
@@ -137,13 +168,10 @@ std::vector<MapRun> runMap(const Options& s) {
       const std::string& method = methods[j % methods.size()];
       const Problem p = mapProblem("conditional", m.cables, m.seed, kMapFrames);
       m.middle_pct = bench::thresholdMiddleErrorPct(p);
-      const int pop = (kDefaultPopulation + kMapIslands - 1) / kMapIslands;
+      IslandVariant v;
       if (method == "default") m.run = bench::runMethod("default", p, m.seed, kMapBudget, false);
       else if (method == "sade") m.run = bench::runMethod("sade", p, m.seed, kMapBudget, false);
-      else
-        m.run = runIslands(p, m.seed, kMapBudget, kMapIslands, pop,
-                           method == "islands" ? mme::MigrationTopology::kRing : mme::MigrationTopology::kBroadcast,
-                           1, false);
+      else if (islandVariant(method, &v)) m.run = runIslands(p, m.seed, kMapBudget, v.options, v.population, 1, false);
       m.run.method = method;
       m.right_intervals = inTheTruthsIntervals(p, m.run.values);
       say("(map) %3d/%zu cables %2d seed %2d %-17s max error %8.3g %%  %7llu evaluations  %5.2f s  (%4.0f s)\n",
@@ -234,7 +262,9 @@ std::vector<std::string> runScaling(const Options& s) {
     int reached = 0;
     for (int seed = 1; seed <= s.seeds; ++seed) {
       const Problem p = mapProblem("conditional", 5, seed, kMapFrames);
-      const RunResult r = runIslands(p, seed, budget, n, kDefaultPopulation, mme::MigrationTopology::kRing, threads, true);
+      mme::IslandOptions io;
+      io.islands = n;
+      const RunResult r = runIslands(p, seed, budget, io, kDefaultPopulation, threads, true);
       const double per_island = static_cast<double>(r.evaluations) / std::max(1e-9, r.wall_s) / n;
       reached += r.to_1pct.reached ? 1 : 0;
       wall.push_back(r.to_1pct.reached ? r.to_1pct.wall_s : INFINITY);
@@ -274,10 +304,14 @@ void writeMarkdown(const Options& s, const std::vector<std::string>& map_lines,
   if (!map_lines.empty()) {
     std::fprintf(f, "## Conditional cells of the stability map\n\n"
                  "Cable objects (mapProblem(\"conditional\", cables, seed), 60 frames, noise-free), %d seeds, "
-                 "budget 45 000 evaluations / 20 s. `default`: identify with no option (population 100); "
-                 "`islands`: 3 islands of population 34 (the same evaluations per generation and budget), ring "
-                 "migration of 2 every 10 generations; `islands_broadcast`: the same, migrants to every island; "
-                 "`sade`: pagmo2 SADE as bench_peers runs it (stopped by the oracle the first time within 1 %%). "
+                 "budget 45 000 evaluations / 20 s, every method stopping by its own rules (the islands and "
+                 "`one_300` as `default`: converged when the best cost stalls). `default`: identify with no "
+                 "option (one population of 100); `one_300`: one population of 300 (the evaluations per "
+                 "generation of three islands of 100); `islands`: `identify --islands 3` (3 islands of 100, 2 "
+                 "migrants every 10 generations to every other island); `islands_ring`: the same, migrants to "
+                 "the next island only; `islands_alone`: the same, no migration; `islands_third`: 3 islands of "
+                 "34 (the default's evaluations per generation), broadcast; `sade`: pagmo2 SADE as bench_peers "
+                 "runs it (stopped by the oracle the first time within 1 %%). "
                  "Success: every parameter within 1 %% of the truth, judged on the final answer (not sade). "
                  "`middle`: instances whose threshold-interval middles are all within 1 %% of the truth, the "
                  "most a method judged on its final answer can reach. `right intervals`: runs whose every threshold "
@@ -317,9 +351,17 @@ int parseArguments(int argc, char** argv, Options* s) {
     else if (a == "--only") s->only = value();
     else if (a == "--sade") s->sade = true;
     else if (a == "--quick") s->quick = true;
+    else if (a == "--methods" || a == "--cables") {
+      std::stringstream ss(value());
+      std::string item;
+      while (std::getline(ss, item, ',')) {
+        if (a == "--methods") s->methods.push_back(item);
+        else s->cables.push_back(std::atoi(item.c_str()));
+      }
+    }
     else {
       std::fprintf(stderr, "usage: bench_islands [--out DIR] [--seeds N] [--workers W] [--only map,scaling] "
-                           "[--sade] [--quick]\n");
+                           "[--methods M,..] [--cables C,..] [--sade] [--quick]\n");
       return 2;
     }
   }

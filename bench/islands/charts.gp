@@ -16,7 +16,7 @@ if (data_lines(map) > 0) {
   set ylabel "successes"
   set xlabel "cable types"
   set key top right
-  methods = "default islands islands_broadcast sade"
+  methods = "default one_300 islands islands_ring islands_alone islands_third sade"
   plot for [m in methods] sprintf("< awk -F, '$2 == \"%s\" { print $1 \",\" $3 }' '%s'", m, map) \
        using 2:xtic(1) title m, \
        sprintf("< awk -F, 'NR > 1 && $2 == \"default\" { print $1 \",\" $7 }' '%s'", map) \

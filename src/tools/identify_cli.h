@@ -54,7 +54,7 @@ inline CliSpec identifyCliSpec() {
          "Island model: N populations of --population each, own seeds, stepping in lock-step in "
          "this process (threads, deterministic); the best island's best is the answer."},
         {"migration-period", "G", "10", "Islands: generations between migrations."},
-        {"migrants", "K", "2", "Islands: best individuals each island sends to the next per migration."}}},
+        {"migrants", "K", "2", "Islands: best individuals each island sends to every other island per migration."}}},
       {"Cost and refinement",
        {{"cost", "NAME", "auto (paper: short_term)",
          "auto: the output error when the markers look noisy, else the one-step cost; "

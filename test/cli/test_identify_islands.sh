@@ -24,7 +24,7 @@ run --out "$tmp/one.yaml" --threads 1 >"$tmp/one.log" || fail "islands run faile
 run --out "$tmp/two.yaml" --threads 2 --quiet >"$tmp/two.log"
 cmp <(grep -v wall_time_s "$tmp/one.yaml") <(grep -v wall_time_s "$tmp/two.yaml") ||
   fail "--islands 3 wrote different models for 1 and 2 threads"
-grep -q "^identify: 3 islands of population 30 in this process (migration every 5 generations, 2 migrant(s) each, ring)" \
+grep -q "^identify: 3 islands of population 30 in this process (migration every 5 generations, 2 migrant(s) each, broadcast)" \
   "$tmp/one.log" || fail "no islands line at the start"
 grep -E -q "^islands: 3, [1-9][0-9]* migration\(s\), best island [0-2]; per island evaluations \(immigrants accepted\):( [0-9]+ \([0-9]+\)){3}$" \
   "$tmp/one.log" || fail "no per-island line: $(grep '^islands' "$tmp/one.log")"
