@@ -1,5 +1,5 @@
 // The island model: one island is the plain evolution strategy, the result does not depend on
-// the thread count, migration carries a good individual along the ring, bad options are refused,
+// the thread count, migration carries a good individual to the next island (ring) or to all (broadcast), bad options are refused,
 // and on cable objects (several threshold intervals: several local minima) three islands beat
 // one population of 300 (the same evaluations per generation).
 #include <gtest/gtest.h>
@@ -59,7 +59,7 @@ TEST(IslandModel, IslandSeedsDifferAndTheFirstIsTheRunsSeed) {
   EXPECT_NE(mme::islandSeed(42, 1), 42u);
 }
 
-TEST(IslandModel, SameSeedAndIslandsGiveTheSameResultOnOneAndTwoThreads) {
+TEST(IslandModel, SameSeedAndIslandsGiveTheSameResultOnOneTwoAndSixThreads) {
   Fixture f;
   mme::IdentifyOptions o;
   o.generations = 40;
@@ -70,8 +70,12 @@ TEST(IslandModel, SameSeedAndIslandsGiveTheSameResultOnOneAndTwoThreads) {
   o.estimate_std = false;
   o.es.threads = 1;
   const mme::IdentifyResult one = mme::identifyModel(f.search, f.data, o);
-  o.es.threads = 2;
+  o.es.threads = 2;  // two islands step at a time
   const mme::IdentifyResult two = mme::identifyModel(f.search, f.data, o);
+  o.es.threads = 6;  // three islands at a time, each evaluating its children on two threads
+  const mme::IdentifyResult six = mme::identifyModel(f.search, f.data, o);
+  EXPECT_EQ(one.values, six.values);
+  EXPECT_EQ(one.evaluations, six.evaluations);
   EXPECT_EQ(one.values, two.values);
   EXPECT_EQ(one.global_cost, two.global_cost);
   EXPECT_EQ(one.evaluations, two.evaluations);
