@@ -1,7 +1,8 @@
 // The island model: one island is the plain evolution strategy, the result does not depend on
-// the thread count, migration carries a good individual to the next island (ring) or to all (broadcast), bad options are refused,
-// and on cable objects (several threshold intervals: several local minima) three islands beat
-// one population of 300 (the same evaluations per generation).
+// the thread count, migration carries a good individual to the next island (ring) or to all
+// (broadcast), bad options are refused, and on cable objects (several threshold intervals:
+// several local minima) three islands beat one population of 300 (the same evaluations per
+// generation).
 #include <gtest/gtest.h>
 
 #include <algorithm>
