@@ -34,10 +34,9 @@ struct IslandOptions {
   int islands = 1;                        ///< populations; 1 = the single evolution strategy
   int migration_period_generations = 10;  ///< generations between migrations
   int migrants = 2;                       ///< best individuals each island sends per migration
-  /// Broadcast: on the conditional objects (docs/bench/islands.md) it found the truth's threshold
-  /// intervals at least as often as the ring. An immigrant takes only the place of a worse
-  /// individual and the islands keep drawing their own children, so it does not make the islands
-  /// one population; and a few islands re-evaluate few migrants.
+  /// Broadcast: on the conditional objects (docs/bench/islands.md) it put the thresholds in the
+  /// truth's intervals at least as often as the ring, and with a few islands the receivers
+  /// re-evaluate only a few migrants. The online islands (one topic) broadcast too.
   MigrationTopology topology = MigrationTopology::kBroadcast;
 };
 
