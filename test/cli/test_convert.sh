@@ -122,7 +122,7 @@ for off in "--sensor-muscles 0" "--preset paper --generations 30"; do
   ! grep -q "kind: muscle" "$tmp/arm_passive.yaml" || { echo "$off: a muscle written"; exit 1; }
 done
 # ... and the particles file identify and the node start from.
-"$bin/identify" --select-structure --model "$tmp/particles.yaml" --trajectory "$tmp/piece.bag" \
+"$bin/identify" --sensor-muscles off --select-structure --model "$tmp/particles.yaml" --trajectory "$tmp/piece.bag" \
   --out "$tmp/piece.yaml" --quiet >/dev/null
 
 # Bad input: exit 2, one line naming what is wrong, nothing written.

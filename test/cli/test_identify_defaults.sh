@@ -86,7 +86,7 @@ grep -q -F "identify: next: (every frame of the file was used: identify on fewer
 
 # ---------------------------------------------------------------- frames, progress, initial state
 # Frames 5..64 counted from 0 are this TRC's Frame# 6..65; the model written starts at Frame# 6.
-"$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/long1.trc" --first-frame 5 --frames 60 \
+"$bin/identify" --sensor-muscles off --model "$tmp/free.yaml" --trajectory "$tmp/long1.trc" --first-frame 5 --frames 60 \
   --generations 20 --patience 0 --out "$tmp/cut.yaml" >"$tmp/cut.log" 2>"$tmp/cut.err" ||
   fail "identify --first-frame: $(cat "$tmp/cut.err")"
 grep -q "^identify: frames 5..64 of 150 used (counted from 0); the file's Frame# 6..65" "$tmp/cut.log" ||
@@ -121,7 +121,7 @@ set +e; "$bin/simulate" --model "$tmp/truth.yaml" --start-frame 3 --out "$tmp/x.
 # when stdout and stderr go to one pipe.
 sed -E '0,/stiffness: \{free: true, min: 1.04, max: 104\}/s//stiffness: {free: true, min: 1.04, max: 8}/' \
   "$tmp/free.yaml" >"$tmp/bounded.yaml"
-"$bin/identify" --model "$tmp/bounded.yaml" --trajectory "$tmp/long.trc" --frames 60 --out "$tmp/b.yaml" 2>&1 |
+"$bin/identify" --sensor-muscles off --model "$tmp/bounded.yaml" --trajectory "$tmp/long.trc" --frames 60 --out "$tmp/b.yaml" 2>&1 |
   cat >"$tmp/piped.log"
 awk '/^parameter / { table = NR } /^stopped: / { stopped = NR } /warning: .*search bound/ { warning = NR }
      END { exit !(table && stopped && warning > stopped) }' "$tmp/piped.log" ||
