@@ -67,7 +67,7 @@ inline CliSpec identifyCliSpec() {
          "Choose the bonds from the markers (springs, dampers, flexion, nonlinear and "
          "conditional levels, judged on held-out frames); without --model the markers are the "
          "particles. Writes the levels' report to OUT.yaml.structure.csv."},
-        {"sensor-muscles", "auto|off|SENSORS", "auto (off with --compare-to-model)",
+        {"sensor-muscles", "auto|off|SENSORS", "auto (off with --preset paper or --compare-to-model)",
          "Sensor muscles after the passive model, kept only where they predict held-out frames "
          "better. auto: reading 16 bonds each, but not started where the passive model already "
          "predicts at the markers' noise or its one-step residual is only noise (the reason is "
