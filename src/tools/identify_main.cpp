@@ -101,8 +101,8 @@ void parseSensorMuscleOptions(const mme::CliArgs& args, Command* c) {
   const bool automatic = choice == "auto";
   options.skip_without_gain = automatic;
   if (!automatic && choice != "off" && choice.find_first_not_of("0123456789") != std::string::npos)
-    throw mme::InputError("--sensor-muscles must be auto, off or a number of sensors (0..16), got '" +
-                          choice + "'");
+    throw mme::InputError("--sensor-muscles must be auto, off or a number of sensors (0.." +
+                          std::to_string(mme::kMaxMuscleInputs) + "), got '" + choice + "'");
   if (choice == "off")
     options.sensors = 0;
   else if (!automatic)
