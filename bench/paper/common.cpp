@@ -6,10 +6,10 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/identification/search/parameter_space.h"
-#include "motion_model_estimation/identification/structure/marker_model.h"
 
 namespace paper {
 
@@ -43,7 +43,7 @@ RunResult runEs(const Model& truth, const mme::Trajectory& data, mme::IdentifyOp
     if (out.generations_to_target < 0 && e.max < 0.01) out.generations_to_target = p.generation;
     if (per_generation) per_generation(p, e);
   };
-  out.result = mme::identifyModel(forgetFreeValues(truth), data, options, progress);
+  out.result = mme::identifyPassive(forgetFreeValues(truth), data, identifyStep(options, progress));
   out.errors = relativeErrors(out.result.values, true_values);
   return out;
 }
@@ -102,17 +102,27 @@ mme::IdentifyOptions esOptions(const Settings& s, int generations) {
   return o;
 }
 
-mme::StructureOptions structureOptions(const Settings& s) {
-  mme::StructureOptions so;
-  so.identify = mme::identifyOptionsFor(mme::Preset::kDefault);
-  so.identify.es.threads = s.threads;
-  so.identify.estimate_std = false;
-  return so;
+mme::PipelineOptions identifyStep(const mme::IdentifyOptions& identify,
+                                  std::function<void(const mme::Progress&)> progress) {
+  mme::PipelineOptions p;
+  p.identify = identify;
+  p.progress = std::move(progress);
+  return p;
 }
 
-mme::StructureResult selectStructureOnFitted(const mme::HeldOutSplit& split, const mme::StructureOptions& so) {
+mme::PipelineOptions structureStep(const Settings& s) {
+  mme::PipelineOptions p;
+  p.select_structure = true;
+  p.identify = mme::identifyOptionsFor(mme::Preset::kDefault);
+  p.identify.es.threads = s.threads;
+  p.identify.estimate_std = false;
+  return p;
+}
+
+mme::StructureResult selectStructureOnFitted(const mme::HeldOutSplit& split,
+                                             const mme::PipelineOptions& options) {
   checkUnseen(split.fit, split, "structure selection");
-  return mme::selectStructure(mme::markerModel(split.fit), split.fit, so);
+  return mme::chooseStructure(mme::startingModel(split.fit), split.fit, options);
 }
 
 void checkUnseen(const mme::Trajectory& seen, const mme::HeldOutSplit& split, const std::string& who) {

@@ -1,6 +1,8 @@
 // bench_paper's shared pieces: the settings from the command line, relative parameter errors,
 // one identification run with its error trace, the CSV and table writers and the summary.csv line
-// every paper experiment appends. Each experiment lives in its own file (experiments.h lists them).
+// every paper experiment appends. Each experiment lives in its own file (experiments.h lists them)
+// and runs the offline pipeline's named steps (pipeline/identify_pipeline.h), so that what the
+// bench measures is what `identify` runs.
 #pragma once
 
 #include <cstdio>
@@ -9,7 +11,7 @@
 #include <vector>
 
 #include "motion_model_estimation/identification/identifier.h"
-#include "motion_model_estimation/identification/structure/structure_selection.h"
+#include "motion_model_estimation/pipeline/identify_pipeline.h"
 
 namespace paper {
 
@@ -72,15 +74,22 @@ void summary(const std::string& experiment, const RunResult& r);
 /// overrides, threads and seed).
 mme::IdentifyOptions esOptions(const Settings& s, int generations);
 
-/// Structure selection as the benchmarks run it: the default engine, no std.
-mme::StructureOptions structureOptions(const Settings& s);
+/// The pipeline's options for its identification step alone: `identify`, and `progress` after
+/// every generation (may be empty).
+mme::PipelineOptions identifyStep(const mme::IdentifyOptions& identify,
+                                  std::function<void(const mme::Progress&)> progress = nullptr);
 
-/// Structure selection on the fitted part of `split` only (`split.fit`, particles from the
-/// markers), so that the held-out frames a benchmark then reports were seen by no choice: the
+/// The pipeline's options for its structure step as the benchmarks run it: the default engine,
+/// no std.
+mme::PipelineOptions structureStep(const Settings& s);
+
+/// The pipeline's structure step on the fitted part of `split` only (`split.fit`, its starting
+/// model: particles from the markers), so that the held-out frames a benchmark then reports were seen by no choice: the
 /// selection ranks its levels on the end of the fitted part, never on `split.held`'s frames
 /// from `split.held_start`. Throws std::logic_error (checkUnseen) when the frames it saw reach
 /// the reported ones.
-mme::StructureResult selectStructureOnFitted(const mme::HeldOutSplit& split, const mme::StructureOptions& so);
+mme::StructureResult selectStructureOnFitted(const mme::HeldOutSplit& split,
+                                             const mme::PipelineOptions& options);
 
 /// Throws std::logic_error naming `who` unless every frame of `seen` comes before the first
 /// frame `split` reports (`split.held` from `split.held_start`), by their times.

@@ -1,6 +1,8 @@
 // Fig. 5 of the paper (`--only fig5`): log cost against generations without muscles, with
 // dampers, with muscles and with sensor muscles, on the walker and the real recordings, each
-// fit judged on its held-out frames (fig5.csv, fig5_summary.csv).
+// fit judged on its held-out frames (fig5.csv, fig5_summary.csv). The structure, the muscles'
+// placement, the searches, the sensor muscles and the judge are the offline pipeline's named
+// steps (pipeline/identify_pipeline.h); the variants around them are the figure's.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -12,11 +14,10 @@
 #include "experiments.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
-#include "motion_model_estimation/identification/structure/marker_model.h"
 #include "motion_model_estimation/identification/muscles/muscle_placement.h"
 #include "motion_model_estimation/identification/muscles/sensor_muscles.h"
-#include "motion_model_estimation/identification/estimators/prediction_error.h"
 #include "motion_model_estimation/identification/structure/structure_selection.h"
+#include "motion_model_estimation/pipeline/identify_pipeline.h"
 #include "motion_model_estimation/io/trajectory_io.h"
 #include "motion_model_estimation/scenes/scenes.h"
 
@@ -81,7 +82,7 @@ std::vector<Fig5Case> fig5Cases(const Settings& s) {
                      mme::simulateTrajectory(walker.model, std::min(walker.default_frames, 100),
                                              walker.model.frame_rate_hz)});
   }
-  mme::StructureOptions so = structureOptions(s);
+  const mme::PipelineOptions so = structureStep(s);
   for (const char* file : {"motion_capture_walk.trc", "subject01_walk1.trc", "arm26_elbow_flex.trc",
                            "Sample01_Eb015pi.c3d", "Sample02_dec_real.c3d", "Sample02_pc_int.c3d",
                            "Sample26_Walking_Hybrid_1_1.c3d"}) {
@@ -109,29 +110,39 @@ mme::IdentifyOptions fig5Options(const Settings& s, int generations) {
   return o;
 }
 
-/// Sensor muscles fitted on the dampers' fit by least squares (sensor_muscles.h; no search, no
-/// curve).
-VariantFit fitSensorMuscles(const Fig5Case& c, const Model& dampers_fit, const mme::Trajectory& fit) {
-  VariantFit out;
-  mme::SensorMuscleOptions sm;
-  sm.progress = [&c](const std::string& line) {
+/// Sensor muscles fitted on the dampers' fit by least squares (the pipeline's sensor-muscle step;
+/// no search, no curve). False when the data cannot feed them (said, and the variant skipped).
+bool fitSensorMuscles(const Fig5Case& c, const Model& dampers_fit, const mme::Trajectory& fit,
+                      VariantFit* out) {
+  mme::PipelineOptions p;
+  p.sensor_muscles = mme::SensorMuscleOptions{};
+  p.say = [&c](const std::string& line) {
     std::printf("fig5: %s: %s\n", c.name.c_str(), line.c_str());
     std::fflush(stdout);
   };
+  p.warn = p.say;
+  mme::PipelineResult step;  // the step fits on the identified model: the dampers' fit
+  step.identified.model = dampers_fit;
+  step.model = dampers_fit;
   const auto began = std::chrono::steady_clock::now();
-  const mme::SensorMuscleResult sr = mme::addSensorMuscles(dampers_fit, fit, sm);
-  out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
-  std::printf("fig5: %s: sensor muscles chosen: ridge %.0e, %d rollout round(s), activation "
-              "time constant %g s, %s anchors%s (the body travels %.2f body sizes)%s\n",
-              c.name.c_str(), sr.ridge, sr.candidates[sr.chosen].rollout_rounds,
-              sr.activation_time_s, sr.anchors ? "with" : "without",
-              !sr.anchors ? "" : sr.anchor_stiffness ? " with a stiffness of their own"
-                                                     : " without a stiffness of their own",
-              sr.body_travel, sr.better_than_passive ? "" : " (not better than the passive model)");
-  out.fitted = sr.model;
-  out.parameters = mme::freeParameters(dampers_fit).size() + sr.unknowns;
-  out.cost_m2 = sr.residual_rms_m * sr.residual_rms_m;
-  return out;
+  mme::fitSensorMuscleStep(fit, p, &step);
+  out->wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+  if (!step.sensor_muscles) return false;
+  const mme::SensorMuscleResult& sr = *step.sensor_muscles;
+  if (sr.skipped || sr.chosen < 0)
+    std::printf("fig5: %s: no sensor muscles: %s\n", c.name.c_str(), sr.not_kept_because.c_str());
+  else
+    std::printf("fig5: %s: sensor muscles chosen: ridge %.0e, %d rollout round(s), activation "
+                "time constant %g s, %s anchors%s (the body travels %.2f body sizes)%s\n",
+                c.name.c_str(), sr.ridge, sr.candidates[sr.chosen].rollout_rounds,
+                sr.activation_time_s, sr.anchors ? "with" : "without",
+                !sr.anchors ? "" : sr.anchor_stiffness ? " with a stiffness of their own"
+                                                       : " without a stiffness of their own",
+                sr.body_travel, sr.better_than_passive ? "" : " (not better than the passive model)");
+  out->fitted = sr.model;  // judged even when not better than the passive model
+  out->parameters = mme::freeParameters(dampers_fit).size() + sr.unknowns;
+  out->cost_m2 = sr.residual_rms_m * sr.residual_rms_m;
+  return true;
 }
 
 /// The start of a searched variant: springs or dampers from the structure, the case's own
@@ -144,8 +155,9 @@ bool variantStart(const Fig5Case& c, const std::string& v, bool own_muscles, con
   } else if (own_muscles) {
     *start = forgetFreeValues(c.structure);
   } else {
-    *start = mme::addMuscles(dampers_fit, &fit, mme::MusclePlacement{});
-    if (mme::muscleTypeCount(*start) == 0) {
+    try {
+      *start = mme::placeMuscles(dampers_fit, fit, mme::MusclePlacement{});
+    } catch (const mme::InputError&) {
       std::printf("fig5: %s: no spring type to turn into a muscle (the chosen structure has "
                   "none)\n", c.name.c_str());
       return false;
@@ -166,7 +178,7 @@ VariantFit searchVariant(const Fig5Case& c, const char* variant, const Model& st
                  chart, static_cast<unsigned long long>(p.evaluations),
                  std::log10(std::max(p.best_cost, 1e-300)), p.wall_time_s);
   };
-  const mme::IdentifyResult r = mme::identifyModel(start, fit, o, log);
+  const mme::IdentifyResult r = mme::identifyPassive(start, fit, identifyStep(o, log));
   std::fflush(f);
   VariantFit out;
   out.fitted = start;
@@ -185,10 +197,7 @@ bool judgeHeldOut(const Fig5Case& c, const char* variant, const Model& fitted,
   bool bounded = false;
   try {
     // The sensor muscles' anchors are fixed particles without markers: left unseen.
-    std::vector<std::string> names;
-    for (const mme::Particle& p : fitted.particles) names.push_back(p.name);
-    const mme::PredictionReport pr = mme::evaluatePredictions(
-        fitted, mme::remapMarkers(split.held, names, nullptr), {10}, 10.0, split.held_start);
+    const mme::PredictionReport pr = mme::judgePredictions(fitted, split.held, split.held_start);
     for (const mme::PredictionError& row : pr.rows) rms[static_cast<int>(row.predictor)] = row.rms_m;
     bounded = pr.rollout_bounded;
   } catch (const mme::InputError& e) {
@@ -222,8 +231,7 @@ void runVariant(const Fig5Case& c, const char* variant, const mme::HeldOutSplit&
   const bool own_muscles = mme::muscleTypeCount(c.structure) > 0;
   VariantFit fit;
   if (v == "sensor_muscles") {
-    if (own_muscles) return;
-    fit = fitSensorMuscles(c, dampers->model, split.fit);
+    if (own_muscles || !fitSensorMuscles(c, dampers->model, split.fit, &fit)) return;
   } else {
     Model start;
     if (!variantStart(c, v, own_muscles, dampers->model, split.fit, &start)) return;

@@ -19,7 +19,8 @@ namespace paper {
 
 /// The online estimator against the offline identification of the same window (within
 /// 2x once converged): frames fed at the data's rate, an update every 1/10 s of frames, then the
-/// window stops and updates run until a refinement finished on it; identifyModel on that window.
+/// window stops and updates run until a refinement finished on it; the pipeline's identification
+/// step on that window.
 void onlineExperiment(const Settings& s) {
   std::FILE* f = openCsv(s.out_dir + "/online.csv",
                          "case,markers,unknowns,window_frames,online_estimator,online_cost_m2,"
@@ -79,7 +80,7 @@ void onlineExperiment(const Settings& s) {
     io.estimate_std = false;
     Model model = c.model;
     if (!(model.frame_rate_hz > 0)) model.frame_rate_hz = window.frame_rate_hz;
-    const mme::IdentifyResult r = mme::identifyModel(model, window, io);
+    const mme::IdentifyResult r = mme::identifyPassive(model, window, identifyStep(io));
     const double ratio = e.global_cost / r.global_cost;
     std::fprintf(f, "%s,%d,%zu,%d,%s,%.6g,%s,%.6g,%.4g,%d,%.2f\n", c.name.c_str(), n,
                  r.parameters.size(), window.numFrames(), mme::estimatorName(e.estimator), e.global_cost,

@@ -3,7 +3,8 @@
 // --select-structure (runPipeline, the same named steps), with the sensor muscles always tried so
 // that their cost shows; after each step its model predicts 10 frames ahead on the frames after
 // the fitted window, which no step has seen, beside the model-free guesses on the same samples
-// (stages.csv; scripts/bench-paper draws stages.png: time against held-out error).
+// (the pipeline's judge step; stages.csv; scripts/bench-paper draws stages.png: time against
+// held-out error).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -14,7 +15,6 @@
 #include "common.h"
 #include "experiments.h"
 #include "motion_model_estimation/core/error.h"
-#include "motion_model_estimation/identification/estimators/prediction_error.h"
 #include "motion_model_estimation/io/trajectory_io.h"
 #include "motion_model_estimation/pipeline/identify_pipeline.h"
 
@@ -120,10 +120,7 @@ void stagesExperiment(const Settings& s) {
                 w.judged_start, w.whole.numFrames() - w.judged_start);
     std::fflush(stdout);
     for (const StageModel& st : runStages(s, w.fitted)) {
-      std::vector<std::string> names;
-      for (const mme::Particle& particle : st.model.particles) names.push_back(particle.name);
-      const mme::PredictionReport report = mme::evaluatePredictions(
-          st.model, mme::remapMarkers(w.whole, names, nullptr), {10}, 10.0, w.judged_start);
+      const mme::PredictionReport report = mme::judgePredictions(st.model, w.whole, w.judged_start);
       const double model_mm = rmsMm(report, mme::Predictor::kModel);
       std::fprintf(f, "%s,%d,%d,%d,%s,%.3f,%zu,%.4g,%.4g,%.4g,%d\n", file, data.numMarkers(),
                    w.judged_start, w.whole.numFrames() - w.judged_start, st.stage.c_str(),

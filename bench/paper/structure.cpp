@@ -1,5 +1,6 @@
-// The `structure` and `structure_real` experiments of bench_paper: structure selection on
-// random objects of known structure and on the real recordings (held-out frames as the judge).
+// The `structure` and `structure_real` experiments of bench_paper: the pipeline's structure step
+// on random objects of known structure and on the real recordings (its judge step on held-out
+// frames).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -10,8 +11,6 @@
 #include "experiments.h"
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
-#include "motion_model_estimation/identification/estimators/prediction_error.h"
-#include "motion_model_estimation/identification/structure/marker_model.h"
 #include "motion_model_estimation/identification/structure/structure_selection.h"
 #include "motion_model_estimation/io/trajectory_io.h"
 #include "motion_model_estimation/scenes/random_object.h"
@@ -27,9 +26,9 @@ void structureExperiment(const Settings& s) {
                          "case,seed,markers,true_bonds,true_types,candidate_bonds,bonds,types,"
                          "f1,components_exact,types_within_10pct,max_error_percent,wall_s");
   const int seeds = s.quick ? 1 : 10;
-  mme::StructureOptions so = structureOptions(s);
+  mme::PipelineOptions so = structureStep(s);
   if (std::getenv("MME_STRUCTURE_VERBOSE"))
-    so.progress = [](const std::string& line) { std::printf("  %s\n", line.c_str()); };
+    so.say = [](const std::string& line) { std::printf("  %s\n", line.c_str()); };
   const auto run = [&](const std::string& name, int seed, const Model& truth, int frames,
                        double noise_m) {
     mme::Trajectory data = mme::simulateTrajectory(truth, frames, truth.frame_rate_hz);
@@ -38,7 +37,7 @@ void structureExperiment(const Settings& s) {
     particles.bonds.clear();
     particles.bond_types.clear();
     const auto start = std::chrono::steady_clock::now();
-    const mme::StructureResult r = mme::selectStructure(particles, data, so);
+    const mme::StructureResult r = mme::chooseStructure(particles, data, so);
     const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const mme::StructureScore sc = mme::scoreStructure(truth, r.model);
     // The components: dampers, cubic terms, flexion and drags exactly where the truth has them.
@@ -116,7 +115,7 @@ namespace {
 bool judgeUnseen(const Model& model, const mme::HeldOutSplit& split, double rms[4]) {
   for (int k = 0; k < 4; ++k) rms[k] = NAN;
   try {
-    const mme::PredictionReport pr = mme::evaluatePredictions(model, split.held, {10}, 10.0, split.held_start);
+    const mme::PredictionReport pr = mme::judgePredictions(model, split.held, split.held_start);
     for (const mme::PredictionError& row : pr.rows) rms[static_cast<int>(row.predictor)] = row.rms_m;
     return pr.rollout_bounded;
   } catch (const mme::InputError& e) {
@@ -132,7 +131,7 @@ bool judgeUnseen(const Model& model, const mme::HeldOutSplit& split, double rms[
 /// judged on the last 20 %, which no choice has seen. Part of `--only structure`; alone as
 /// `--only structure_real`.
 void structureRealExperiment(const Settings& s) {
-  mme::StructureOptions so = structureOptions(s);
+  const mme::PipelineOptions so = structureStep(s);
   std::FILE* g = openCsv(s.out_dir + "/structure_real.csv",
                          "file,markers,frames,candidate_bonds,full_candidate_parameters,chosen,"
                          "bonds,types,parameters,model_rms_10_m,constant_velocity_rms_10_m,"
@@ -146,7 +145,7 @@ void structureRealExperiment(const Settings& s) {
     data = mme::sliceFrames(data, 0, std::min(data.numFrames(), 300));
     const auto start = std::chrono::steady_clock::now();
     try {
-      const mme::HeldOutSplit split = mme::splitHeldOut(data, so.held_out_share, std::string("structure_real ") + file);
+      const mme::HeldOutSplit split = mme::splitHeldOut(data, mme::StructureOptions().held_out_share, std::string("structure_real ") + file);
       const mme::StructureResult r = selectStructureOnFitted(split, so);
       const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       const mme::StructureCandidate* chosen = nullptr;

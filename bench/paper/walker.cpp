@@ -160,7 +160,8 @@ void walkerOutputError(const Settings& s) {
               s.out_dir.c_str());
 }
 
-/// What a user gets without flags on the walker: identifyModel with the default preset (the
+/// What a user gets without flags on the walker: the pipeline's identification step with the
+/// default preset (the
 /// evolution strategy, then the output error) from initial guesses 1 % off (alternate signs),
 /// 50 noiseless frames, 100 generations, a 500-s limit. Opt-in (`--only walker_identify`).
 void walkerIdentify(const Settings& s) {
@@ -176,7 +177,7 @@ void walkerIdentify(const Settings& s) {
   o.es.threads = s.threads;
   o.estimate_std = false;
   const auto began = std::chrono::steady_clock::now();
-  const mme::IdentifyResult r = mme::identifyModel(start, walker.data, o);
+  const mme::IdentifyResult r = mme::identifyPassive(start, walker.data, identifyStep(o));
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
   const WalkerScore score = scoreWalker(walker.scene.model, walker.data, r.values);
   std::fprintf(f, "%d,%d,%s,%.1f,%d,%.6g,%.6g,%s,%.6g\n", walker.frames, o.generations, mme::estimatorName(r.estimator),

@@ -151,6 +151,16 @@ void startAtFrame(const Trajectory& trajectory, int frame, Model* model) {
   for (size_t k = 0; k < aimed.size(); ++k) model->particles[aimed[k]].velocity_mps = velocity_mps[k];
 }
 
+PredictionReport judgePredictions(const Model& model, const Trajectory& data, int first_judged_frame,
+                                  int horizon_frames) {
+  std::vector<std::string> names;
+  names.reserve(model.particles.size());
+  for (const Particle& p : model.particles) names.push_back(p.name);
+  // The rollout runs 10x the judged frames: long enough to show a model that drifts away.
+  return evaluatePredictions(model, remapMarkers(data, names, nullptr), {horizon_frames}, 10.0,
+                             first_judged_frame);
+}
+
 PipelineResult runPipeline(const Model& model, const Trajectory& trajectory,
                            const PipelineOptions& options) {
   const std::string bad = validateOptions(options);

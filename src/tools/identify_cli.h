@@ -72,12 +72,13 @@ inline CliSpec identifyCliSpec() {
          "Choose the bonds from the markers (springs, dampers, flexion, nonlinear and "
          "conditional levels, judged on held-out frames); without --model the markers are the "
          "particles. Writes the levels' report to OUT.yaml.structure.csv."},
-        {"sensor-muscles", "SENSORS|auto", "0 (off)",
-         "Fit sensor muscles reading SENSORS bonds each (16 is a good start) after the passive "
-         "model; kept only where they predict held-out frames better. auto: 16, but not started "
-         "where the passive model already predicts at the markers' noise or its one-step "
-         "residual is only noise (the reason is printed and noted in the file). They add three "
-         "anchor particles far from the body (with anchors)."},
+        {"sensor-muscles", "auto|off|SENSORS", "auto (off with --preset paper or --compare-to-model)",
+         "Sensor muscles after the passive model, kept only where they predict held-out frames "
+         "better. auto: reading 16 bonds each, but not started where the passive model already "
+         "predicts at the markers' noise or its one-step residual is only noise (the reason is "
+         "printed and noted in the file); off (or 0): a plain passive model; SENSORS: reading "
+         "SENSORS bonds each, always fitted. They add three anchor particles far from the body "
+         "(with anchors)."},
         {"muscles-max-time-s", "S", "0 (no limit)",
          "Wall-time limit [s] of the sensor muscles' search (checked between its steps)."},
         {"muscle-neighbours", "K", "2", "Sensor muscles: neighbour muscles per particle."},

@@ -90,33 +90,40 @@ void parseSearchOptions(const mme::CliArgs& args, Command* c) {
 }
 
 /// Sensor muscles (sensor_muscles.h), checked before the run so that a bad option does not wait
-/// for the identification. Opt-in (--sensor-muscles SENSORS, or any of their own options): by
-/// default the answer is a plain passive model, whose cost is bounded by the passive search;
-/// the muscles add anchor particles far from the body and a search that can take far longer,
-/// so the run's closing line suggests them instead. They are written only where they predict
-/// the held-out frames better.
+/// for the identification. The default is auto: the muscles are fitted after the passive model
+/// only where the gain gate finds something to gain (SensorMuscleOptions::skip_without_gain; on
+/// a passive scene it stops them in seconds, on human motion they predict several times better)
+/// and written only where they predict the held-out frames better. `off` (or 0) gives a plain
+/// passive model; a number of sensors forces the search. With --compare-to-model (the muscles
+/// are not the file's) and --preset paper (the paper's method) they are off unless asked for.
 void parseSensorMuscleOptions(const mme::CliArgs& args, Command* c) {
   const bool muscle_options_given = args.has("muscle-neighbours") || args.has("rollout-rounds") ||
                                     args.has("muscle-anchors") || args.has("anchor-stiffness");
-  const bool on_by_default = muscle_options_given;
+  const bool asked = args.has("sensor-muscles");
+  const bool off_by_default = c->compare || c->preset == mme::Preset::kPaper;
+  const std::string choice = args.get("sensor-muscles", off_by_default ? "off" : "auto");
   mme::SensorMuscleOptions options;
   // auto: the default sensors, the search started only where the gain gate finds something to
-  // gain (SensorMuscleOptions::skip_without_gain); a number forces the search with that many.
-  const bool automatic = args.get("sensor-muscles", "") == "auto";
+  // gain; a number forces the search with that many.
+  const bool automatic = choice == "auto";
   options.skip_without_gain = automatic;
-  if (!automatic)
-    options.sensors = static_cast<int>(
-        args.getInt("sensor-muscles", on_by_default ? options.sensors : 0, 0, mme::kMaxMuscleInputs));
+  if (!automatic && choice != "off" && choice.find_first_not_of("0123456789") != std::string::npos)
+    throw mme::InputError("--sensor-muscles must be auto, off or a number of sensors (0.." +
+                          std::to_string(mme::kMaxMuscleInputs) + "), got '" + choice + "'");
+  if (choice == "off")
+    options.sensors = 0;
+  else if (!automatic)
+    options.sensors = static_cast<int>(args.getInt("sensor-muscles", options.sensors, 0, mme::kMaxMuscleInputs));
   if (options.sensors == 0) {
     if (muscle_options_given)
       throw mme::InputError("--muscle-neighbours, --rollout-rounds, --muscle-anchors and --anchor-stiffness need sensor "
-                            "muscles (--sensor-muscles 0 turns them off)");
+                            "muscles (--sensor-muscles off turns them off)");
     if (args.has("muscles-max-time-s"))
-      throw mme::InputError("--muscles-max-time-s needs sensor muscles (off by default; "
-                            "--sensor-muscles SENSORS turns them on)");
+      throw mme::InputError("--muscles-max-time-s needs sensor muscles (--sensor-muscles off turns "
+                            "them off)");
     return;
   }
-  if (c->compare)
+  if (c->compare && (asked || muscle_options_given || args.has("muscles-max-time-s")))
     throw mme::InputError("--compare-to-model and --sensor-muscles do not go together (the "
                           "muscles are not the file's)");
   options.neighbours = static_cast<int>(args.getInt("muscle-neighbours", options.neighbours, 0, 64));
@@ -156,7 +163,7 @@ Command parseCommand(const mme::CliArgs& args) {
   c.compare = args.has("compare-to-model");
   c.quiet = args.has("quiet");
   parseSearchOptions(args, &c);
-  parseSensorMuscleOptions(args, &c);
+  parseSensorMuscleOptions(args, &c);  // after c.compare: it turns the default off
   if (c.compare && c.model_path.empty())
     throw mme::InputError("--compare-to-model needs --model (the values to compare with)");
   c.pipeline.select_structure = args.has("select-structure");
@@ -347,7 +354,7 @@ std::string whyPassive(const mme::PipelineResult& result, const Command& c) {
     if (result.sensor_muscles->skipped) return "sensor muscles " + result.sensor_muscles->not_kept_because;
     return "sensor muscles not kept (" + result.sensor_muscles->not_kept_because + ")";
   }
-  std::string why = "sensor muscles not tried (off by default; --sensor-muscles 16 fits them)";
+  std::string why = "sensor muscles not tried (--sensor-muscles auto or 16 fits them)";
   if (result.structure) {
     // The held-out judgement the structure step already made: the chosen level against the
     // model-free guesses, 10 frames ahead.

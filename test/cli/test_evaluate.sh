@@ -13,7 +13,7 @@ tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 "$bin/simulate" --scene paper_object --frames 160 --out "$tmp/data.trc" --noise-std 1e-5 \
   --truth-out "$tmp/truth.yaml" >/dev/null
 sed -E 's/\{value: [^,]*, free: true/{free: true/' "$tmp/truth.yaml" >"$tmp/free.yaml"
-"$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --frames 100 \
+"$bin/identify" --sensor-muscles off --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --frames 100 \
   --out "$tmp/identified.yaml" --quiet >/dev/null 2>&1
 "$bin/evaluate" --model "$tmp/identified.yaml" --trajectory "$tmp/data.trc" --first-frame 100 \
   --csv "$tmp/out.csv" >"$tmp/out.log"

@@ -16,12 +16,12 @@ tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 # The model as identification sees it: free parameters without values.
 sed -E 's/\{value: [^,]*, free: true/{free: true/' "$tmp/truth.yaml" >"$tmp/free.yaml"
 if grep -q "value:" "$tmp/free.yaml"; then echo "free.yaml still holds values"; exit 1; fi
-"$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/one.yaml" \
+"$bin/identify" --sensor-muscles off --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/one.yaml" \
   >"$tmp/one.log" 2>"$tmp/one.err"
 grep -q "preset default (refinement levenberg_marquardt from generation 5, every 5)" "$tmp/one.log"
 grep -q "^stopped: converged" "$tmp/one.log"
 [ ! -s "$tmp/one.err" ] || { echo "warnings on a whole file: $(cat "$tmp/one.err")"; exit 1; }
-"$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/two.yaml" \
+"$bin/identify" --sensor-muscles off --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/two.yaml" \
   --threads 2 --quiet >/dev/null
 # Same seed and input: the same model for 1 and 2 threads (only the recorded wall time differs).
 cmp <(grep -v wall_time_s "$tmp/one.yaml") <(grep -v wall_time_s "$tmp/two.yaml")
@@ -43,7 +43,7 @@ grep -q "3 generations" "$tmp/paper.log"
 sed -E '0,/stiffness: \{free: true, min: 1.04, max: 104\}/s//stiffness: {free: true, min: 1.04, max: 8}/' \
   "$tmp/free.yaml" >"$tmp/bounded.yaml"
 grep -q "max: 8}" "$tmp/bounded.yaml"
-"$bin/identify" --model "$tmp/bounded.yaml" --trajectory "$tmp/data.trc" --out "$tmp/bounded_out.yaml" \
+"$bin/identify" --sensor-muscles off --model "$tmp/bounded.yaml" --trajectory "$tmp/data.trc" --out "$tmp/bounded_out.yaml" \
   --quiet >"$tmp/bounded.log" 2>"$tmp/bounded.err"
 grep -E -q "^s00/stiffness +8(\.0*)? .*at_upper_bound$" "$tmp/bounded.log"
 grep -q "ended within 1 % of a search bound" "$tmp/bounded.err"
@@ -52,7 +52,7 @@ grep -q "s00/stiffness: at_upper_bound" "$tmp/bounded_out.yaml"
 # A cut-off copy (the header, the blank line and 14 of the 60 rows NumFrames declares): identify
 # says so on stderr, naming the file and both counts, and goes on with the 14 frames.
 head -n 20 "$tmp/data.trc" >"$tmp/cut.trc"
-"$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/cut.trc" --out "$tmp/cut.yaml" \
+"$bin/identify" --sensor-muscles off --model "$tmp/free.yaml" --trajectory "$tmp/cut.trc" --out "$tmp/cut.yaml" \
   --generations 2 --quiet >/dev/null 2>"$tmp/cut.err" ||
   { echo "identify failed on the cut-off file: $(cat "$tmp/cut.err")"; exit 1; }
 expected="identify: warning: $tmp/cut.trc: header declares 60 frames, found 14 (file cut short?)"
@@ -98,7 +98,7 @@ grep -q "^identify: wrote a passive model (15 particles, 31 bonds) to $tmp/sel.y
 # (21, then 41, then all 60 frames: 3 stages), every parameter within 1 % of the truth (the worst
 # 0.85 % off, as without growing: the noise's).
 "$bin/simulate" --scene paper_object --frames 60 --noise-std 1e-4 --seed 5 --out "$tmp/noisy.trc" >/dev/null
-"$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/noisy.trc" --out "$tmp/grown.yaml" \
+"$bin/identify" --sensor-muscles off --model "$tmp/free.yaml" --trajectory "$tmp/noisy.trc" --out "$tmp/grown.yaml" \
   --cost output_error --grow-segments 2 >"$tmp/grown.log" 2>"$tmp/grown.err" ||
   { echo "identify --grow-segments failed:"; cat "$tmp/grown.err"; exit 1; }
 grep -q "output error: 6 segments, .* iterations of the final fit (over 3 stages growing the data, " \

@@ -14,7 +14,7 @@ awk '/^## Muscles/ { s = 1 } s && /^```yaml/ { p = 1; next } p && /^```/ { exit 
   "$here/docs/muscles.md" >"$tmp/muscle.yaml"
 grep -q "kind: muscle" "$tmp/muscle.yaml"
 "$bin/simulate" --model "$tmp/muscle.yaml" --frames 100 --out "$tmp/data.trc" >/dev/null
-"$bin/identify" --model "$tmp/muscle.yaml" --trajectory "$tmp/data.trc" --out "$tmp/out.yaml" \
+"$bin/identify" --sensor-muscles off --model "$tmp/muscle.yaml" --trajectory "$tmp/data.trc" --out "$tmp/out.yaml" \
   >"$tmp/out.log"
 for name in s/stiffness m/stiffness m/rest_length m/gain m/w2_0 m/w2_1 m/w2_2 m/w2_3 m/b2; do
   grep -q "^$name " "$tmp/out.log" || { echo "no row for $name"; cat "$tmp/out.log"; exit 1; }
@@ -60,9 +60,9 @@ sed -e '/^  - name: m$/,/^    b2:/c\  - {name: m, kind: spring, stiffness: {valu
     -e 's/, inputs: \[upper, lower\]//' "$tmp/muscle.yaml" >"$tmp/passive.yaml"
 if grep -q "kind: muscle" "$tmp/passive.yaml"; then echo "passive model still has a muscle"; exit 1; fi
 cost() { sed -n 's/^global cost \([^ ]*\) m^2.*/\1/p' "$1"; }
-"$bin/identify" --model "$tmp/passive.yaml" --trajectory "$tmp/data.trc" --out "$tmp/passive_fit.yaml" \
+"$bin/identify" --sensor-muscles off --model "$tmp/passive.yaml" --trajectory "$tmp/data.trc" --out "$tmp/passive_fit.yaml" \
   --cost short_term >"$tmp/passive.log" 2>"$tmp/passive.err"
-"$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/muscled.yaml" \
+"$bin/identify" --sensor-muscles off --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/muscled.yaml" \
   --cost short_term --add-muscles 2 >"$tmp/muscled.log" 2>"$tmp/muscled.err"
 grep -q "^identify: 3 spring type(s) became muscles reading 2 bond(s) each, 0 hidden unit(s)" "$tmp/muscled.log" ||
   { echo "no placement line:"; head -5 "$tmp/muscled.log"; exit 1; }
@@ -76,9 +76,11 @@ for bad in "--add-muscles 17|--add-muscles must be" "--muscle-hidden -1|--muscle
            "--sensor-muscles 17|--sensor-muscles must be" "--muscle-neighbours 65|--muscle-neighbours must be" \
            "--rollout-rounds 21|--rollout-rounds must be" "--muscle-anchors 2|--muscle-anchors must be" \
            "--anchor-stiffness yes|--anchor-stiffness must be" \
-           "--sensor-muscles 0 --muscle-neighbours 2|need sensor muscles (--sensor-muscles 0 turns them off)" \
+           "--sensor-muscles 0 --muscle-neighbours 2|need sensor muscles (--sensor-muscles off turns them off)" \
+           "--sensor-muscles off --muscle-neighbours 2|need sensor muscles (--sensor-muscles off turns them off)" \
            "--sensor-muscles 6 --muscles-max-time-s -1|--muscles-max-time-s must be" \
-           "--muscles-max-time-s 60|--muscles-max-time-s needs sensor muscles"; do
+           "--sensor-muscles yes|--sensor-muscles must be" \
+           "--sensor-muscles off --muscles-max-time-s 60|--muscles-max-time-s needs sensor muscles"; do
   set +e
   "$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/data.trc" --out "$tmp/x.yaml" \
     ${bad%%|*} 2>"$tmp/bad3.err" >/dev/null
@@ -171,12 +173,13 @@ grep -q "^identify: warning: no sensor muscles (sensor muscles: 40 frames are to
 grep -q "sensor muscles: none (sensor muscles: 40 frames are too few" "$tmp/short.yaml" ||
   { echo "the written model's notes do not say why it has no sensor muscles"; exit 1; }
 
-# --sensor-muscles auto: the search is not started where the passive model already explains the
-# data (here its own simulation, noiseless): the closing line and the file's notes say why, and
-# the passive model is written. On the muscle's data the gate lets the search through.
+# --sensor-muscles auto, the default (no flag here): the search is not started where the passive
+# model already explains the data (here its own simulation, noiseless): the closing line and the
+# file's notes say why, and the passive model is written. On the muscle's data the gate lets the
+# search through.
 "$bin/simulate" --model "$tmp/passive_fit.yaml" --frames 100 --out "$tmp/passive_data.trc" >/dev/null
 "$bin/identify" --model "$tmp/passive_fit.yaml" --trajectory "$tmp/passive_data.trc" --out "$tmp/gate.yaml" \
-  --cost short_term --generations 5 --sensor-muscles auto >"$tmp/gate.log" 2>&1
+  --cost short_term --generations 5 >"$tmp/gate.log" 2>&1
 grep -q "^identify: sensor muscles: not fitted: the passive model predicts the validation frames" "$tmp/gate.log" ||
   { echo "--sensor-muscles auto on passive data:"; grep sensor "$tmp/gate.log"; exit 1; }
 grep -q "sensor muscles: not fitted: " "$tmp/gate.yaml" || { echo "no note in the file"; exit 1; }
@@ -185,4 +188,4 @@ grep -q "sensor muscles: not fitted: " "$tmp/gate.yaml" || { echo "no note in th
   --cost short_term --sensor-muscles auto --muscle-anchors 0 >"$tmp/gate_on.log" 2>&1
 grep -q "^identify: sensor muscles: 16 sensors\|^identify: sensor muscles: [0-9]* sensors, [0-9]* muscles, ridge .*, [0-9]* parameters on [0-9]* samples" \
   "$tmp/gate_on.log" || { echo "--sensor-muscles auto on the muscle's data:"; grep sensor "$tmp/gate_on.log"; exit 1; }
-echo "muscle: documented example simulated, identified, exported and reloaded; bad definitions refused; muscles placed on a passive fit lower its cost; sensor muscles predict its held-out frames better; --sensor-muscles auto skips them on passive data"
+echo "muscle: documented example simulated, identified, exported and reloaded; bad definitions refused; muscles placed on a passive fit lower its cost; sensor muscles predict its held-out frames better; --sensor-muscles auto (the default) skips them on passive data"

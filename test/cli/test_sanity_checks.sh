@@ -22,7 +22,7 @@ awk 'BEGIN { FS = OFS = "\t" } NR == 3 { $5 = "m" } { print }' "$tmp/data.trc" >
   fail "convert failed on a file in the wrong units: $(cat "$tmp/conv.err")"
 grep -q "convert: warning: $tmp/mm_as_m.trc: the markers span [0-9.]* m (median over frames): a human capture spans 0.1-3 m; is the file in millimetres with a header saying m" \
   "$tmp/conv.err" || fail "convert: no units warning: $(cat "$tmp/conv.err")"
-"$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/mm_as_m.trc" --out "$tmp/mm.yaml" \
+"$bin/identify" --sensor-muscles off --model "$tmp/free.yaml" --trajectory "$tmp/mm_as_m.trc" --out "$tmp/mm.yaml" \
   --generations 2 --quiet >/dev/null 2>"$tmp/mm.err" || fail "identify failed: $(cat "$tmp/mm.err")"
 grep -q "identify: warning: .*the markers span" "$tmp/mm.err" || fail "identify: no units warning: $(cat "$tmp/mm.err")"
 "$bin/convert" --trajectory "$tmp/data.trc" --out "$tmp/conv2.trc" >/dev/null 2>"$tmp/good.err"
@@ -40,7 +40,7 @@ grep -q "simulate: warning: --noise-std 0.1 is in metres (whatever --units): 100
 sed -E 's/mass: [0-9.]+/mass: 1/' "$tmp/free.yaml" >"$tmp/unit_mass.yaml"
 printf '  - name: unused\n    kind: spring\n    stiffness: {free: true, min: 1, max: 100}\n' >"$tmp/unused_type"
 sed "/^bond_types:/r $tmp/unused_type" "$tmp/unit_mass.yaml" >"$tmp/unused.yaml"
-"$bin/identify" --model "$tmp/unused.yaml" --trajectory "$tmp/data.trc" --out "$tmp/unused_out.yaml" \
+"$bin/identify" --sensor-muscles off --model "$tmp/unused.yaml" --trajectory "$tmp/data.trc" --out "$tmp/unused_out.yaml" \
   --generations 3 --quiet >"$tmp/table.log" 2>"$tmp/table.err" || fail "identify failed: $(cat "$tmp/table.err")"
 grep -E -q "^parameter +value +std +unit +flag$" "$tmp/table.log" || fail "no unit column: $(cat "$tmp/table.log")"
 grep -E -q "^s00/stiffness +[-0-9.e+]+ +[-0-9.e+]+ +N/m( |$)" "$tmp/table.log" || fail "s00/stiffness without N/m: $(cat "$tmp/table.log")"
@@ -50,7 +50,7 @@ grep -q "^std '-': not determined: " "$tmp/table.log" || fail "no reason for the
 if grep -qi "nan" "$tmp/table.log"; then fail "nan in the table: $(grep -i nan "$tmp/table.log")"; fi
 grep -q "^masses: 1 kg per marker (not measured): stiffness, damping and gain are per kilogram of marker" \
   "$tmp/table.log" || fail "no per-kilogram line"
-"$bin/identify" --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/fit.yaml" \
+"$bin/identify" --sensor-muscles off --model "$tmp/free.yaml" --trajectory "$tmp/data.trc" --out "$tmp/fit.yaml" \
   --generations 2 --quiet >"$tmp/fit.log" 2>/dev/null
 if grep -q "^masses:" "$tmp/fit.log"; then fail "per-kilogram line with measured masses"; fi
 

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "motion_model_estimation/core/error.h"
+#include "motion_model_estimation/core/model_builder.h"
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/core/stiffness.h"
 #include "motion_model_estimation/identification/estimators/answer_judge.h"
@@ -172,6 +173,43 @@ TEST(IdentifyPipeline, CancelEndsWithAPassiveModelAndNoMuscles) {
   EXPECT_LE(r.identified.generations, 1);
   EXPECT_FALSE(r.sensor_muscles.has_value());
   for (double v : r.identified.values) EXPECT_TRUE(std::isfinite(v));
+}
+
+// The judge step matches the data's markers to the model's particles by name: markers in another
+// order, a marker the model has not and a fixed particle without a marker (as the sensor
+// muscles' anchors) give the figures of the same model on its own markers. The truth predicts
+// its own noiseless motion where the guesses cannot; a judged frame past the data is refused.
+TEST(IdentifyPipeline, TheJudgeMatchesMarkersByNameAndJudgesAfterTheHistory) {
+  const mme::Model truth = mme::test::smallObject();
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 90, truth.frame_rate_hz);
+  const int judged_from = 60;
+  const mme::PredictionReport plain = mme::evaluatePredictions(truth, data, {10}, 10.0, judged_from);
+  std::vector<std::string> shuffled;
+  for (const mme::Particle& p : truth.particles) shuffled.insert(shuffled.begin(), p.name);
+  shuffled.push_back("stray");  // seen by nobody: occluded throughout
+  const mme::Trajectory capture = mme::remapMarkers(data, shuffled, nullptr);
+  mme::Model anchored = truth;
+  mme::ParticleOptions anchor;
+  anchor.name = "anchor_0";
+  anchor.fixed = true;
+  mme::addParticle(&anchored, Eigen::Vector3d(5, 5, 5), anchor);
+  const mme::PredictionReport judged = mme::judgePredictions(anchored, capture, judged_from);
+  ASSERT_EQ(judged.rows.size(), plain.rows.size());
+  EXPECT_EQ(judged.starts, plain.starts);
+  for (size_t k = 0; k < plain.rows.size(); ++k) {
+    EXPECT_EQ(judged.rows[k].horizon, 10);
+    EXPECT_EQ(judged.rows[k].predictor, plain.rows[k].predictor);
+    EXPECT_EQ(judged.rows[k].samples, plain.rows[k].samples) << k;
+    EXPECT_NEAR(judged.rows[k].rms_m, plain.rows[k].rms_m, 1e-12 + 1e-9 * plain.rows[k].rms_m) << k;
+  }
+  EXPECT_EQ(judged.rollout_bounded, plain.rollout_bounded);
+  double model_m = NAN, constant_velocity_m = NAN;
+  for (const mme::PredictionError& e : judged.rows) {
+    if (e.predictor == mme::Predictor::kModel) model_m = e.rms_m;
+    if (e.predictor == mme::Predictor::kConstantVelocity) constant_velocity_m = e.rms_m;
+  }
+  EXPECT_LT(model_m, 1e-3 * constant_velocity_m);
+  EXPECT_THROW(mme::judgePredictions(truth, data, data.numFrames()), mme::InputError);
 }
 
 TEST(IdentifyPipeline, MusclesNeedASpringType) {

@@ -13,6 +13,7 @@
 
 #include "motion_model_estimation/core/model.h"
 #include "motion_model_estimation/core/trajectory.h"
+#include "motion_model_estimation/identification/estimators/prediction_error.h"
 #include "motion_model_estimation/identification/identifier.h"
 #include "motion_model_estimation/identification/muscles/muscle_placement.h"
 #include "motion_model_estimation/identification/muscles/sensor_muscles.h"
@@ -105,6 +106,16 @@ void fitSensorMuscleStep(const Trajectory& trajectory, const PipelineOptions& op
 /// be simulated); fixed particles (anchors, ground points) and particles not seen keep the
 /// model's. InputError when `frame` is outside the data.
 void startAtFrame(const Trajectory& trajectory, int frame, Model* model);
+
+/// Step 7, the judge (not run by runPipeline: what to judge on is the caller's choice): the
+/// model's open-loop predictions `horizon_frames` ahead on `data`'s frames from
+/// `first_judged_frame` on (the frames before it are history only, e.g. the fitted frames
+/// before held-out ones), beside the model-free guesses on the same samples, and whether its
+/// long rollout stays bounded. `data`'s markers are matched to the model's particles by name, so
+/// `data` may be the capture itself; particles without a marker (the sensor muscles' anchors)
+/// are unseen. InputError when nothing can be judged (no frame after the history, no rate).
+PredictionReport judgePredictions(const Model& model, const Trajectory& data, int first_judged_frame,
+                                  int horizon_frames = 10);
 
 /// Every step the options ask for, in order, from `model` (a model file's, or startingModel's)
 /// and the trajectory matched to its particles.
