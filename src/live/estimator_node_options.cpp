@@ -185,18 +185,25 @@ void readSearch(const ParameterSource& params, OnlineEstimatorOptions* estimator
           "~cost must be auto, short_term or output_error, got '" + cost + "'");
 }
 
-/// A graph resource name as ROS accepts it: letters, digits, '_' and '/', not starting with a
-/// digit or '_' (a '~' prefix is private).
+/// A graph resource name as ROS accepts it: '/'-separated names of letters, digits and '_',
+/// each starting with a letter (a leading '~' makes it private).
 bool isTopicName(const std::string& name) {
-  if (name.empty()) return false;
-  const size_t first = name[0] == '~' ? 1 : 0;
-  if (first < name.size() && (std::isdigit(static_cast<unsigned char>(name[first])) || name[first] == '_'))
-    return false;
-  for (size_t i = first; i < name.size(); ++i) {
+  size_t i = !name.empty() && name[0] == '~' ? 1 : 0;
+  if (i == name.size()) return false;
+  bool segment_start = true;
+  for (; i < name.size(); ++i) {
     const unsigned char c = static_cast<unsigned char>(name[i]);
-    if (!std::isalnum(c) && c != '_' && c != '/') return false;
+    if (c == '/') {
+      if (i > 0 && name[i - 1] == '/') return false;
+      segment_start = true;
+    } else if (segment_start) {
+      if (!std::isalpha(c)) return false;
+      segment_start = false;
+    } else if (!std::isalnum(c) && c != '_') {
+      return false;
+    }
   }
-  return name.find("//") == std::string::npos;
+  return !segment_start;  // not ending with '/'
 }
 
 /// The island model (~islands/enabled, ~island_id, ~migration_*, ~migrants); after readSearch,

@@ -16,9 +16,11 @@ std::string formatIslandStats(const IslandStats& s) {
                      " migrant_batches_from_peers=" + std::to_string(s.batches_from_peers);
   char field[128];
   if (s.batches_from_peers > 0) {
-    std::snprintf(field, sizeof(field), " migrant_latency_last_ms=%.3f migrant_latency_max_ms=%.3f",
-                  s.latency_last_ms, s.latency_max_ms);
+    std::snprintf(field, sizeof(field),
+                  " migrant_latency_p50_ms=%.3f migrant_latency_p99_ms=%.3f migrant_latency_max_ms=%.3f",
+                  s.latency_p50_ms, s.latency_p99_ms, s.latency_max_ms);
     text += field;
+    text += " migrant_batches_late=" + std::to_string(s.batches_late);
   }
   if (s.period_ms > 0.0) {
     std::snprintf(field, sizeof(field), " migration_period_ms=%.3f", s.period_ms);

@@ -30,7 +30,7 @@ void IslandLink::afterUpdate() {
   const auto sent_at = std::chrono::steady_clock::now();
   std::lock_guard<std::mutex> lock(stats_mutex_);
   if (stats_.sent > 0)
-    stats_.period_ms = std::chrono::duration<double, std::milli>(sent_at - last_sent_time_).count();
+    periods_ms_.add(std::chrono::duration<double, std::milli>(sent_at - last_sent_time_).count());
   last_sent_time_ = sent_at;
   stats_.sent += batch.individuals.size();
 }
@@ -38,13 +38,21 @@ void IslandLink::afterUpdate() {
 void IslandLink::onMigrants(const motion_model_estimation::Migrants::ConstPtr& msg) {
   if (msg->island_id == options_.island_id) return;  // our own, back from the shared topic
   const ros::WallTime now = ros::WallTime::now();
-  const double latency_ms = 1e3 * (now.toSec() - msg->header.stamp.toSec());
+  const double stamp_s = msg->header.stamp.toSec();
+  const double latency_ms = 1e3 * (now.toSec() - stamp_s);
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.batches_from_peers;
-    stats_.latency_last_ms = latency_ms;
+    latencies_ms_.add(latency_ms);
     stats_.latency_max_ms = stats_.batches_from_peers == 1 ? latency_ms
                                                            : std::max(stats_.latency_max_ms, latency_ms);
+    // Late: slower than the sender's own period for this batch (its previous one's stamp to
+    // this one's), i.e. the next batch was already due when this one arrived.
+    const auto previous = last_stamp_s_.find(msg->island_id);
+    if (previous != last_stamp_s_.end() && stamp_s > previous->second &&
+        latency_ms > 1e3 * (stamp_s - previous->second))
+      ++stats_.batches_late;
+    last_stamp_s_[msg->island_id] = stamp_s;
   }
   MigrantBatch batch;
   std::string why = fromMigrantsMsg(*msg, &batch);
@@ -60,6 +68,10 @@ IslandStats IslandLink::stats() const {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     s = stats_;
   }
+  const LatencySummary latency = latencies_ms_.summary();  // thread-safe units
+  s.latency_p50_ms = latency.p50_ms;
+  s.latency_p99_ms = latency.p99_ms;
+  s.period_ms = periods_ms_.summary().p50_ms;
   s.counters = estimator_->migrationCounters();
   return s;
 }

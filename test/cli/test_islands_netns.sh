@@ -3,9 +3,10 @@
 # own address, stand for two machines. The ROS master (roscore) runs in the first; one
 # estimator_node island runs in each with ROS_IP and ROS_MASTER_URI set as on real hosts, both
 # replaying the same simulated bag of paper_object with their own seeds. Passes when migrants
-# arrive in both directions and every batch's trip (sender's send stamp to the receiver's
-# arrival, ~stats migrant_latency_max_ms) is shorter than one migration period of its sender
-# (~stats migration_period_ms); the figures are printed. Needs root (ip netns); where network
+# arrive in both directions and 99 % of the batches' trips (sender's send stamp to the
+# receiver's arrival, ~stats migrant_latency_p99_ms) are shorter than one migration period of
+# their sender (its median, ~stats migration_period_ms); the figures are printed, with the
+# largest trip and the batches later than their sender's own period. Needs root (ip netns); where network
 # namespaces cannot be made the test FAILS saying so: it is never skipped.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/../.." && pwd)
@@ -63,7 +64,7 @@ pids+=($!)
 for _ in $(seq 100); do in_host B rosparam get /rosdistro >/dev/null 2>&1 && break; sleep 0.2; done
 in_host B rosparam get /rosdistro >/dev/null || { echo "the master in host A does not answer from host B" >&2; exit 1; }
 
-period=5
+period=10  # the default ~migration_period_generations
 island() {  # island A|B SEED
   in_host "$1" "$bin/estimator_node" __name:=estimator __ns:="island_$1" \
     _model:="$here/config/models/paper_object.yaml" _bag:="$tmp/paper_object.bag" \
@@ -75,10 +76,11 @@ island() {  # island A|B SEED
 island A 1
 island B 2
 
-# stats A|B: the island's latest ~stats line, read from its own host.
+# stats A|B: the island's latest ~stats line, read from its own host ("" when none came; the
+# CSV form keeps it on one line; rostopic takes seconds to start on a busy machine).
 stats() {
-  in_host "$1" timeout 10 rostopic echo -n 1 "/island_$1/estimator/stats" 2>/dev/null |
-    sed -n 's/^data: "\(.*\)"$/\1/p'
+  { in_host "$1" timeout 40 rostopic echo -p -n 1 "/island_$1/estimator/stats" 2>/dev/null || true; } |
+    sed -n '2s/^[^,]*,//p'
 }
 value() {  # value LINE KEY
   tr ' ' '\n' <<<"$1" | sed -n "s/^$2=//p"
@@ -111,16 +113,19 @@ for pair in "A B" "B A"; do
   receiver=$1 sender=$2
   line_r=$line_a line_s=$line_b
   [ "$receiver" = B ] && { line_r=$line_b; line_s=$line_a; }
-  latency=$(value "$line_r" migrant_latency_max_ms)
-  last=$(value "$line_r" migrant_latency_last_ms)
+  p50=$(value "$line_r" migrant_latency_p50_ms)
+  p99=$(value "$line_r" migrant_latency_p99_ms)
+  max=$(value "$line_r" migrant_latency_max_ms)
+  late=$(value "$line_r" migrant_batches_late)
   batches=$(value "$line_r" migrant_batches_from_peers)
   received=$(value "$line_r" migrants_received)
   accepted=$(value "$line_r" migrants_accepted)
   period_ms=$(value "$line_s" migration_period_ms)
   echo "$sender -> $receiver: $batches batches, $received migrants received, $accepted accepted;" \
-       "latency max $latency ms (last $last ms); $sender's migration period ($period generations) $period_ms ms"
-  if ! awk -v l="$latency" -v p="$period_ms" 'BEGIN { exit !(l >= 0 && l < p) }'; then
-    echo "FAILED: $sender -> $receiver: a batch took $latency ms, more than one migration period ($period_ms ms)" >&2
+       "latency p50 $p50 ms, p99 $p99 ms, max $max ms; $late batches later than their sender's" \
+       "period; $sender's migration period ($period generations, median) $period_ms ms"
+  if ! awk -v l="$p99" -v p="$period_ms" 'BEGIN { exit !(l >= 0 && l < p) }'; then
+    echo "FAILED: $sender -> $receiver: 1 % of the batches took $p99 ms or more, over one migration period ($period_ms ms)" >&2
     fail=1
   fi
 done

@@ -130,12 +130,15 @@ TEST(EstimatorStats, OutputErrorRejectionsAndTheIslandsLedger) {
   EXPECT_EQ(mme::formatStats(s), base + " migrants_sent=12 migrants_received=9 migrants_accepted=4 "
                                         "migrants_refused=3 migrants_dropped=1 migrant_batches_from_peers=0");
   s.islands->batches_from_peers = 4;
-  s.islands->latency_last_ms = 1.25;
+  s.islands->latency_p50_ms = 1.25;
+  s.islands->latency_p99_ms = 3.0;
   s.islands->latency_max_ms = 3.5;
+  s.islands->batches_late = 1;
   s.islands->period_ms = 400.0;
   EXPECT_EQ(mme::formatStats(s), base + " migrants_sent=12 migrants_received=9 migrants_accepted=4 "
                                         "migrants_refused=3 migrants_dropped=1 migrant_batches_from_peers=4 "
-                                        "migrant_latency_last_ms=1.250 migrant_latency_max_ms=3.500 "
+                                        "migrant_latency_p50_ms=1.250 migrant_latency_p99_ms=3.000 "
+                                        "migrant_latency_max_ms=3.500 migrant_batches_late=1 "
                                         "migration_period_ms=400.000");
 }
 

@@ -22,9 +22,14 @@ struct IslandStats {
   MigrationCounters counters;      ///< what it was offered (received, refused, accepted, ...)
   uint64_t batches_from_peers = 0; ///< messages of other islands, refused ones included
   /// [ms] from a peer's send stamp to the arrival here (wall clocks: the same host, or hosts
-  /// kept in sync), the last and the largest; valid once batches_from_peers > 0.
-  double latency_last_ms = 0.0, latency_max_ms = 0.0;
-  /// [ms] wall time between this island's last two emigrations (0 before the second).
+  /// kept in sync), over the last 1024 batches (nearest rank) and the largest ever; valid once
+  /// batches_from_peers > 0.
+  double latency_p50_ms = 0.0, latency_p99_ms = 0.0, latency_max_ms = 0.0;
+  /// Batches that took longer than their sender's own last period (the time between its
+  /// previous batch and this one): they arrived later than one migration period.
+  uint64_t batches_late = 0;
+  /// [ms] median wall time between two emigrations of this island, over its last 1024 (0
+  /// before the second).
   double period_ms = 0.0;
 };
 
@@ -53,8 +58,9 @@ struct EstimatorStats {
 /// "max_update_gap_ms=X max_update_gap_10s_ms=X output_error_rejections=N" once an update
 /// happened (X with 3 decimals); with ~islands/enabled "migrants_sent=N migrants_received=N
 /// migrants_accepted=N migrants_refused=N migrants_dropped=N migrant_batches_from_peers=N", then
-/// "migrant_latency_last_ms=X migrant_latency_max_ms=X" once a peer's batch arrived and
-/// "migration_period_ms=X" once this island emigrated twice;
+/// "migrant_latency_p50_ms=X migrant_latency_p99_ms=X migrant_latency_max_ms=X
+/// migrant_batches_late=N" once a peer's batch arrived and "migration_period_ms=X" once this
+/// island emigrated twice;
 /// then, once a prediction report exists, per horizon K and predictor P (its CSV name: model,
 /// constant_velocity, constant_acceleration, gravity_only) "predict<K>_<P>_mm=X" (RMS per
 /// coordinate [mm], 3 decimals; horizons without a sample are left out) and

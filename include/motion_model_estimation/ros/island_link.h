@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <map>
 #include <mutex>
 #include <string>
 
@@ -16,6 +17,7 @@
 #include "motion_model_estimation/identification/online/online_estimator.h"
 #include "motion_model_estimation/live/estimator_node_options.h"
 #include "motion_model_estimation/live/estimator_stats.h"
+#include "motion_model_estimation/live/latency_stats.h"
 
 namespace mme {
 
@@ -39,9 +41,12 @@ class IslandLink {
   ros::Publisher publisher_;
   ros::Subscriber subscriber_;
   uint32_t last_sent_generation_ = 0;  // the worker's (afterUpdate only)
-  mutable std::mutex stats_mutex_;     // guards stats_ and last_sent_time_
-  IslandStats stats_;                  // sent, batches, latency, period (counters on demand)
+  mutable std::mutex stats_mutex_;     // guards the members below
+  IslandStats stats_;                  // sent, batches, late, max latency (the rest on demand)
   std::chrono::steady_clock::time_point last_sent_time_;
+  LatencyStats latencies_ms_;          // peers' batches: send stamp -> arrival
+  LatencyStats periods_ms_;            // this island's time between two emigrations
+  std::map<std::string, double> last_stamp_s_;  // per peer, its previous batch's send stamp
 };
 
 }  // namespace mme
