@@ -1,6 +1,7 @@
 #include "motion_model_estimation/live/estimator_node_options.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 
@@ -184,6 +185,57 @@ void readSearch(const ParameterSource& params, OnlineEstimatorOptions* estimator
           "~cost must be auto, short_term or output_error, got '" + cost + "'");
 }
 
+/// A graph resource name as ROS accepts it: '/'-separated names of letters, digits and '_',
+/// each starting with a letter (a leading '~' makes it private).
+bool isTopicName(const std::string& name) {
+  size_t i = !name.empty() && name[0] == '~' ? 1 : 0;
+  if (i == name.size()) return false;
+  bool segment_start = true;
+  for (; i < name.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(name[i]);
+    if (c == '/') {
+      if (i > 0 && name[i - 1] == '/') return false;
+      segment_start = true;
+    } else if (segment_start) {
+      if (!std::isalpha(c)) return false;
+      segment_start = false;
+    } else if (!std::isalnum(c) && c != '_') {
+      return false;
+    }
+  }
+  return !segment_start;  // not ending with '/'
+}
+
+/// The island model (~islands/enabled, ~island_id, ~migration_*, ~migrants); after readSearch,
+/// which sets the population the migrants are taken from.
+void readIslands(const ParameterSource& params, EstimatorNodeOptions* options) {
+  IslandOptions& o = options->islands;
+  std::string topic;
+  const bool topic_set = params.get("migration_topic", &topic);
+  if (topic_set) o.migration_topic = topic;
+  o.enabled = topic_set && !topic.empty();  // a topic alone turns migration on...
+  params.get("islands/enabled", &o.enabled);  // ...unless ~islands/enabled says otherwise
+  params.get("island_id", &o.island_id);
+  params.get("migration_period_generations", &o.migration_period_generations);
+  params.get("migrants", &o.migrants);
+  params.get("migrant_queue_batches", &options->estimator.migrant_queue_batches);
+  require(options->estimator.migrant_queue_batches >= 1, "~migrant_queue_batches must be >= 1");
+  if (!o.enabled) return;
+  require(!o.migration_topic.empty(),
+          "~migration_topic must not be empty with ~islands/enabled true (default /mme/migrants)");
+  require(isTopicName(o.migration_topic),
+          "~migration_topic '" + o.migration_topic +
+              "' is not a topic name (letters, digits, '_' and '/'; e.g. /mme/migrants)");
+  require(o.island_id.find_first_of(" \t\r\n") == std::string::npos,
+          "~island_id must not contain spaces, got '" + o.island_id + "'");
+  require(o.migration_period_generations >= 1, "~migration_period_generations must be >= 1");
+  require(o.migrants >= 1 && o.migrants <= options->estimator.es.population,
+          "~migrants must be in [1, ~population] (" +
+              std::to_string(options->estimator.es.population) + "), got " + std::to_string(o.migrants));
+  require(options->estimator.estimate_values,
+          "~islands/enabled needs a search: it cannot be combined with ~estimate_values false");
+}
+
 }  // namespace
 
 EstimatorNodeOptions readEstimatorNodeOptions(const ParameterSource& params) {
@@ -192,6 +244,7 @@ EstimatorNodeOptions readEstimatorNodeOptions(const ParameterSource& params) {
   readFilesAndStructure(params, &o);
   readWindow(params, &o);
   readSearch(params, &o.estimator);
+  readIslands(params, &o);
   const std::string bad = validateOptions(o.estimator);
   require(bad.empty(), "~" + bad);  // its messages name the option, i.e. the parameter
   return o;

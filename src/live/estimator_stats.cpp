@@ -4,6 +4,33 @@
 
 namespace mme {
 
+namespace {
+
+/// The island model's fields of the ~stats line (formatStats).
+std::string formatIslandStats(const IslandStats& s) {
+  std::string text = " migrants_sent=" + std::to_string(s.sent) +
+                     " migrants_received=" + std::to_string(s.counters.received) +
+                     " migrants_accepted=" + std::to_string(s.counters.accepted) +
+                     " migrants_refused=" + std::to_string(s.counters.refused) +
+                     " migrants_dropped=" + std::to_string(s.counters.dropped) +
+                     " migrant_batches_from_peers=" + std::to_string(s.batches_from_peers);
+  char field[128];
+  if (s.batches_from_peers > 0) {
+    std::snprintf(field, sizeof(field),
+                  " migrant_latency_p50_ms=%.3f migrant_latency_p99_ms=%.3f migrant_latency_max_ms=%.3f",
+                  s.latency_p50_ms, s.latency_p99_ms, s.latency_max_ms);
+    text += field;
+    text += " migrant_batches_late=" + std::to_string(s.batches_late);
+  }
+  if (s.period_ms > 0.0) {
+    std::snprintf(field, sizeof(field), " migration_period_ms=%.3f", s.period_ms);
+    text += field;
+  }
+  return text;
+}
+
+}  // namespace
+
 std::string formatStats(const EstimatorStats& s) {
   std::string text =
       "accepted=" + std::to_string(s.input.accepted) + " rejected=" + std::to_string(s.rejected) +
@@ -26,6 +53,7 @@ std::string formatStats(const EstimatorStats& s) {
     std::snprintf(field, sizeof(field), " max_update_gap_ms=%.3f max_update_gap_10s_ms=%.3f",
                   s.updates.max_gap_ms, s.updates.recent_max_gap_ms);
     text += field;
+    text += " output_error_rejections=" + std::to_string(s.output_error_rejections);
   }
   if (s.prediction) {
     for (const PredictionError& row : s.prediction->rows) {
@@ -36,6 +64,7 @@ std::string formatStats(const EstimatorStats& s) {
     }
     text += s.prediction->rollout_bounded ? " rollout_bounded=1" : " rollout_bounded=0";
   }
+  if (s.islands) text += formatIslandStats(*s.islands);
   if (!s.muscles.empty()) {
     text += " muscles=" + s.muscles + " muscle_count=" + std::to_string(s.muscle_count) +
             " muscle_refits=" + std::to_string(s.muscle_refits) +

@@ -1,5 +1,6 @@
 #include "motion_model_estimation/ros/conversions.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <sensor_msgs/point_cloud2_iterator.h>
@@ -111,6 +112,48 @@ motion_model_estimation::ModelEstimate toModelEstimateMsg(const Estimate& e, con
   for (ParameterFlag flag : e.parameter_flags) msg.parameter_flags.push_back(parameterFlagName(flag));
   msg.noise_std_m = e.noise_std_m;
   return msg;
+}
+
+motion_model_estimation::Migrants toMigrantsMsg(const MigrantBatch& batch, const ros::Time& stamp) {
+  motion_model_estimation::Migrants msg;
+  msg.header.stamp = stamp;
+  msg.island_id = batch.island_id;
+  msg.seed = batch.seed;
+  msg.generation = batch.generation;
+  msg.parameter_names = batch.parameter_names;
+  msg.migrant_count = static_cast<uint32_t>(batch.individuals.size());
+  for (const Individual& ind : batch.individuals) {
+    msg.genes.insert(msg.genes.end(), ind.genes.begin(), ind.genes.end());
+    msg.mutabilities.insert(msg.mutabilities.end(), ind.mutability.begin(), ind.mutability.end());
+    msg.costs.push_back(ind.cost);
+  }
+  msg.window_start.fromSec(std::max(0.0, batch.window_start_time_s));
+  msg.window_end.fromSec(std::max(0.0, batch.window_end_time_s));
+  return msg;
+}
+
+std::string fromMigrantsMsg(const motion_model_estimation::Migrants& msg, MigrantBatch* batch) {
+  *batch = MigrantBatch();
+  const size_t n = msg.parameter_names.size(), count = msg.migrant_count;
+  if (msg.costs.size() != count || msg.genes.size() != count * n || msg.mutabilities.size() != count * n)
+    return "migrant_count " + std::to_string(count) + " and " + std::to_string(n) +
+           " parameter names need " + std::to_string(count * n) + " genes and mutabilities and " +
+           std::to_string(count) + " costs; the message has " + std::to_string(msg.genes.size()) +
+           ", " + std::to_string(msg.mutabilities.size()) + " and " + std::to_string(msg.costs.size());
+  batch->island_id = msg.island_id;
+  batch->seed = msg.seed;
+  batch->generation = msg.generation;
+  batch->parameter_names = msg.parameter_names;
+  batch->window_start_time_s = msg.window_start.toSec();
+  batch->window_end_time_s = msg.window_end.toSec();
+  batch->individuals.resize(count);
+  for (size_t i = 0; i < count; ++i) {
+    Individual& ind = batch->individuals[i];
+    ind.genes.assign(msg.genes.begin() + i * n, msg.genes.begin() + (i + 1) * n);
+    ind.mutability.assign(msg.mutabilities.begin() + i * n, msg.mutabilities.begin() + (i + 1) * n);
+    ind.cost = msg.costs[i];
+  }
+  return "";
 }
 
 }  // namespace mme

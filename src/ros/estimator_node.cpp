@@ -146,6 +146,18 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
     predictions_ = std::make_unique<PredictionMonitor>(std::vector<int>{1, 5, 10},
                                                        options_.prediction_period_sec);
   stats_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), &EstimatorNode::onStatsTimer, this);
+  if (options_.islands.enabled) {
+    IslandOptions islands = options_.islands;
+    if (islands.island_id.empty()) islands.island_id = ros::this_node::getName();
+    try {
+      islands_ = std::make_unique<IslandLink>(nh_, islands, estimator_.get());
+    } catch (const ros::InvalidNameException& e) {
+      throw InputError("~migration_topic '" + islands.migration_topic + "': " + e.what());
+    }
+    ROS_INFO("estimator_node: island '%s': %d migrants every %d generations on %s",
+             islands.island_id.c_str(), islands.migrants, islands.migration_period_generations,
+             islands.migration_topic.c_str());
+  }
   ROS_INFO("estimator_node: %zu particles, %zu free parameters, window %d frames, population %d, "
            "input %s%s", model.particles.size(), freeParameters(model).size(),
            options_.estimator.window_frames, options_.estimator.es.population,
@@ -266,6 +278,8 @@ void EstimatorNode::onStatsTimer(const ros::WallTimerEvent&) {
   stats.clock_jumps = clock_jumps_.jumps();
   stats.updates = update_stats_.summary(steadyNowS());
   stats.latency = latency_stats_.summary();
+  stats.output_error_rejections = estimator_->estimate().output_error_rejections;
+  if (islands_) stats.islands = islands_->stats();
   if (predictions_) {
     const double now_s = steadyNowS();
     Trajectory window;
@@ -301,10 +315,12 @@ void EstimatorNode::workerLoop() {
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(5.0, "estimator_node: update failed: %s", e.what());
     }
-    if (updated)
+    if (updated) {
       update_stats_.onUpdate(steadyNowS());
-    else
+      if (islands_) islands_->afterUpdate();
+    } else {
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
   }
 }
 

@@ -173,3 +173,53 @@ TEST(EstimatorNodeOptions, AParameterOfTheWrongTypeIsRefusedByName) {
 }
 
 }  // namespace
+
+namespace {
+
+// The island model: off by default; ~islands/enabled or a ~migration_topic alone turns it on,
+// an explicit ~islands/enabled false wins; every bad value is refused naming its parameter.
+TEST(EstimatorNodeOptions, IslandsAreOffByDefaultAndCheckedWhenOn) {
+  const mme::EstimatorNodeOptions defaults = mme::readEstimatorNodeOptions(withModel());
+  EXPECT_FALSE(defaults.islands.enabled);
+  EXPECT_EQ(defaults.islands.migration_topic, "/mme/migrants");
+  EXPECT_EQ(defaults.islands.migration_period_generations, 10);
+  EXPECT_EQ(defaults.islands.migrants, 3);
+  EXPECT_EQ(defaults.estimator.migrant_queue_batches, 8);
+
+  MapSource on = withModel();
+  on.values["islands/enabled"] = true;
+  EXPECT_TRUE(mme::readEstimatorNodeOptions(on).islands.enabled);
+  MapSource by_topic = withModel();
+  by_topic.values["migration_topic"] = std::string("/lab/migrants");
+  EXPECT_TRUE(mme::readEstimatorNodeOptions(by_topic).islands.enabled);
+  by_topic.values["islands/enabled"] = false;
+  EXPECT_FALSE(mme::readEstimatorNodeOptions(by_topic).islands.enabled);
+
+  struct Case {
+    const char* name;
+    MapSource::Value value;
+    const char* message;
+  };
+  const Case cases[] = {
+      {"migration_topic", std::string(""), "~migration_topic must not be empty"},
+      {"migration_topic", std::string("/mme/mi grants"), "~migration_topic '/mme/mi grants' is not a topic name"},
+      {"migration_topic", std::string("/9lives"), "is not a topic name"},
+      {"island_id", std::string("a b"), "~island_id must not contain spaces"},
+      {"migration_period_generations", 0, "~migration_period_generations must be >= 1"},
+      {"migrants", 0, "~migrants must be in [1, ~population]"},
+      {"migrants", 100000, "~migrants must be in [1, ~population]"},
+      {"migrant_queue_batches", 0, "~migrant_queue_batches must be >= 1"},
+      {"estimate_values", false, "cannot be combined with ~estimate_values false"},
+  };
+  for (const Case& c : cases) {
+    MapSource s = on;
+    s.values[c.name] = c.value;
+    const std::string why = refusal(s);
+    EXPECT_NE(why.find(c.message), std::string::npos) << c.name << ": " << why;
+  }
+  MapSource wrong_type = on;
+  wrong_type.values["migrants"] = std::string("three");
+  EXPECT_NE(refusal(wrong_type).find("~migrants"), std::string::npos);
+}
+
+}  // namespace

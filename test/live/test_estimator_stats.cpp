@@ -40,7 +40,7 @@ TEST(EstimatorStats, LatencyAndUpdateGapFieldsOnceTheyExist) {
   EXPECT_EQ(mme::formatStats(s),
             "accepted=1 rejected=0 occluded=0 rejected_time=0 rejected_size=0 clock_jumps=0 "
             "updates=42 markers_published=0 max_update_gap_ms=512.250 "
-            "max_update_gap_10s_ms=61.000");
+            "max_update_gap_10s_ms=61.000 output_error_rejections=0");
   s.latency.count = 9;
   s.latency.kept = 9;
   s.latency.p50_ms = 0.2114;
@@ -48,7 +48,7 @@ TEST(EstimatorStats, LatencyAndUpdateGapFieldsOnceTheyExist) {
   EXPECT_EQ(mme::formatStats(s),
             "accepted=1 rejected=0 occluded=0 rejected_time=0 rejected_size=0 clock_jumps=0 "
             "updates=42 markers_published=9 latency_p50_ms=0.211 latency_p99_ms=1.500 "
-            "max_update_gap_ms=512.250 max_update_gap_10s_ms=61.000");
+            "max_update_gap_ms=512.250 max_update_gap_10s_ms=61.000 output_error_rejections=0");
 }
 
 TEST(EstimatorStats, PredictionFieldsPerHorizonAndPredictorInMillimetres) {
@@ -108,6 +108,38 @@ TEST(EstimatorStats, AFailedSelectionSaysWhyOnOneLineAndACutOneIsFlagged) {
   const std::string tail = " structure=failed structure_error=structure selection: 30 frames are too few (need 35)";
   ASSERT_GE(line.size(), tail.size());
   EXPECT_EQ(line.substr(line.size() - tail.size()), tail);
+}
+
+// The estimate's rejected output-error fits appear with the update fields; the island model's
+// ledger only with ~islands/enabled, its latency once a peer's batch came and its period once
+// this island emigrated twice.
+TEST(EstimatorStats, OutputErrorRejectionsAndTheIslandsLedger) {
+  mme::EstimatorStats s;
+  s.updates.updates = 3;
+  s.output_error_rejections = 2;
+  const std::string base = mme::formatStats(s);
+  EXPECT_NE(base.find(" output_error_rejections=2"), std::string::npos) << base;
+  EXPECT_EQ(base.find("migrants_"), std::string::npos) << base;
+  mme::IslandStats islands;
+  islands.sent = 12;
+  islands.counters.received = 9;
+  islands.counters.accepted = 4;
+  islands.counters.refused = 3;
+  islands.counters.dropped = 1;
+  s.islands = islands;
+  EXPECT_EQ(mme::formatStats(s), base + " migrants_sent=12 migrants_received=9 migrants_accepted=4 "
+                                        "migrants_refused=3 migrants_dropped=1 migrant_batches_from_peers=0");
+  s.islands->batches_from_peers = 4;
+  s.islands->latency_p50_ms = 1.25;
+  s.islands->latency_p99_ms = 3.0;
+  s.islands->latency_max_ms = 3.5;
+  s.islands->batches_late = 1;
+  s.islands->period_ms = 400.0;
+  EXPECT_EQ(mme::formatStats(s), base + " migrants_sent=12 migrants_received=9 migrants_accepted=4 "
+                                        "migrants_refused=3 migrants_dropped=1 migrant_batches_from_peers=4 "
+                                        "migrant_latency_p50_ms=1.250 migrant_latency_p99_ms=3.000 "
+                                        "migrant_latency_max_ms=3.500 migrant_batches_late=1 "
+                                        "migration_period_ms=400.000");
 }
 
 }  // namespace

@@ -14,7 +14,8 @@ set(MME_ESTIMATOR_TEST_NODES
   test_estimator_bad_input     # bad frames survived and counted
   test_estimator_structure     # ~select_structure on a bag
   test_estimator_structure_crash  # ~select_structure on the real window that crashed it
-  test_estimator_muscles)  # ~sensor_muscles on a real walk
+  test_estimator_muscles   # ~sensor_muscles on a real walk
+  test_estimator_islands)  # the island model: exchange, incompatible models, a killed island
 foreach(node ${MME_ESTIMATOR_TEST_NODES})
   add_executable(${node} EXCLUDE_FROM_ALL test/ros/${node}.cpp)
   target_link_libraries(${node} mme_ros ${MME_LIBS} ${catkin_LIBRARIES} ${GTEST_LIBRARIES})
@@ -95,3 +96,23 @@ mme_add_estimator_rostest(estimator_structure_crash
 mme_add_estimator_rostest(estimator_muscles
   ARGS "bag:=${MME_WALK_TRC}" "model:=${MME_WALK_MODEL}"
   DEPENDENCIES test_estimator_muscles mme_estimator_test_data)
+
+# The island model. Incompatible islands need a second model with other free parameters:
+# paper_object with s00's rest length fixed, written at configure time.
+set(_mme_paper_model "${CMAKE_CURRENT_SOURCE_DIR}/config/models/paper_object.yaml")
+set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS "${_mme_paper_model}")
+file(READ "${_mme_paper_model}" _mme_paper)
+string(REPLACE "rest_length: {free: true, min: 0.0589, max: 0.2356}" "rest_length: {value: 0.12}"
+       _mme_other "${_mme_paper}")
+if(_mme_other STREQUAL _mme_paper)
+  message(FATAL_ERROR "estimator_tests.cmake: s00's rest_length line not found in ${_mme_paper_model}")
+endif()
+set(MME_ISLANDS_OTHER_MODEL "${MME_ESTIMATOR_TEST_DIR}/paper_object_s00_rest_length_fixed.yaml")
+file(WRITE "${MME_ISLANDS_OTHER_MODEL}" "${_mme_other}")
+mme_add_estimator_rostest(estimator_islands ARGS "bag:=${MME_ESTIMATOR_TEST_BAG}"
+  DEPENDENCIES test_estimator_islands mme_estimator_test_data)
+mme_add_estimator_rostest(estimator_islands_kill ARGS "bag:=${MME_ESTIMATOR_TEST_BAG}"
+  DEPENDENCIES test_estimator_islands mme_estimator_test_data)
+mme_add_estimator_rostest(estimator_islands_incompatible
+  ARGS "bag:=${MME_ESTIMATOR_TEST_BAG}" "other_model:=${MME_ISLANDS_OTHER_MODEL}"
+  DEPENDENCIES test_estimator_islands mme_estimator_test_data)

@@ -84,4 +84,46 @@ TEST(Conversions, EstimateAsPublished) {
   EXPECT_EQ(msg.noise_std_m, 1e-4);
 }
 
+// Migrants: a batch survives the trip through the message (flattened migrant by migrant), and a
+// message whose arrays do not agree with its counts is refused with the sizes.
+TEST(Conversions, MigrantsRoundTripAndInconsistentArraysRefused) {
+  mme::MigrantBatch batch;
+  batch.island_id = "/island_1/estimator";
+  batch.seed = 7;
+  batch.generation = 40;
+  batch.parameter_names = {"s01/stiffness", "s01/rest_length"};
+  batch.individuals.resize(2);
+  batch.individuals[0].genes = {1.0, -2.0};
+  batch.individuals[0].mutability = {0.1, 0.2};
+  batch.individuals[0].cost = 1e-6;
+  batch.individuals[1].genes = {3.0, -4.0};
+  batch.individuals[1].mutability = {0.3, 0.4};
+  batch.individuals[1].cost = 2e-6;
+  batch.window_start_time_s = 12.5;
+  batch.window_end_time_s = 13.5;
+  ros::Time stamp;
+  stamp.fromSec(100.25);
+  const motion_model_estimation::Migrants msg = mme::toMigrantsMsg(batch, stamp);
+  EXPECT_EQ(msg.header.stamp, stamp);
+  EXPECT_EQ(msg.migrant_count, 2u);
+  EXPECT_EQ(msg.genes, (std::vector<double>{1.0, -2.0, 3.0, -4.0}));
+  mme::MigrantBatch back;
+  ASSERT_EQ(mme::fromMigrantsMsg(msg, &back), "");
+  EXPECT_EQ(back.island_id, batch.island_id);
+  EXPECT_EQ(back.seed, 7u);
+  EXPECT_EQ(back.generation, 40u);
+  EXPECT_EQ(back.parameter_names, batch.parameter_names);
+  ASSERT_EQ(back.individuals.size(), 2u);
+  EXPECT_EQ(back.individuals[1].genes, batch.individuals[1].genes);
+  EXPECT_EQ(back.individuals[1].mutability, batch.individuals[1].mutability);
+  EXPECT_EQ(back.individuals[1].cost, 2e-6);
+  EXPECT_DOUBLE_EQ(back.window_start_time_s, 12.5);
+  EXPECT_DOUBLE_EQ(back.window_end_time_s, 13.5);
+  motion_model_estimation::Migrants bad = msg;
+  bad.genes.pop_back();
+  const std::string why = mme::fromMigrantsMsg(bad, &back);
+  EXPECT_NE(why.find("need 4 genes"), std::string::npos) << why;
+  EXPECT_TRUE(back.individuals.empty());
+}
+
 }  // namespace

@@ -23,6 +23,17 @@ enum class InputType {
   kVicon,       ///< vicon_bridge/Markers (millimetres), received as a ShapeShifter
 };
 
+/// The island model: estimators with their own seeds on the same stream exchange their best
+/// individuals on one shared topic (docs/node.md, "Islands"). Off unless ~islands/enabled is true,
+/// or ~migration_topic is set non-empty and ~islands/enabled is not set.
+struct IslandOptions {
+  bool enabled = false;
+  std::string island_id;                           ///< "" = the node's name (filled by the node)
+  std::string migration_topic = "/mme/migrants";   ///< shared by every island (absolute)
+  int migration_period_generations = 10;           ///< generations between two emigrations
+  int migrants = 3;                                ///< individuals per emigration (the best)
+};
+
 /// ROS-side options (see config/estimator.yaml for meaning, units and defaults).
 struct EstimatorNodeOptions {
   std::string model_path;
@@ -56,6 +67,7 @@ struct EstimatorNodeOptions {
   /// (~muscles_max_time_sec), the refit period (~muscle_refit_period_sec); min_frames follows
   /// ~window_frames.
   MuscleJobOptions muscles = defaultMuscleJobOptions();
+  IslandOptions islands;
   OnlineEstimatorOptions estimator;
 };
 

@@ -12,8 +12,10 @@
 #include <sensor_msgs/PointCloud2.h>
 
 #include "motion_model_estimation/MarkerFrame.h"
+#include "motion_model_estimation/Migrants.h"
 #include "motion_model_estimation/ModelEstimate.h"
 #include "motion_model_estimation/core/trajectory.h"
+#include "motion_model_estimation/identification/online/migrants.h"
 #include "motion_model_estimation/identification/online/online_estimator.h"
 
 namespace mme {
@@ -44,5 +46,12 @@ Eigen::Isometry3d fromTransform(const geometry_msgs::Transform& transform);
 motion_model_estimation::ModelEstimate toModelEstimateMsg(const Estimate& estimate,
                                                           const std::string& frame_id,
                                                           const ros::Time& stamp);
+
+/// An island's emigrants as a Migrants message (genes, mutabilities and costs flattened
+/// migrant by migrant), stamped `stamp` (the send time).
+motion_model_estimation::Migrants toMigrantsMsg(const MigrantBatch& batch, const ros::Time& stamp);
+/// A Migrants message as a batch. Returns "" or, when the arrays' lengths do not agree with
+/// migrant_count and the parameter names, why the message is refused (the batch is then empty).
+std::string fromMigrantsMsg(const motion_model_estimation::Migrants& msg, MigrantBatch* batch);
 
 }  // namespace mme

@@ -34,6 +34,7 @@
 #include "motion_model_estimation/live/structure_job.h"
 #include "motion_model_estimation/live/update_gap_stats.h"
 #include "motion_model_estimation/live/visualisation_snapshot.h"
+#include "motion_model_estimation/ros/island_link.h"
 #include "motion_model_estimation/ros/marker_builder.h"
 
 namespace mme {
@@ -121,6 +122,8 @@ class EstimatorNode {
   // The input path (names_ -> estimator -> clock_jumps_) against ~load_model's replacement.
   std::mutex input_mutex_;
   MarkerNameMap names_;
+  // ~islands/enabled; declared after estimator_, so destroyed (unsubscribed) before it.
+  std::unique_ptr<IslandLink> islands_;
 };
 
 }  // namespace mme

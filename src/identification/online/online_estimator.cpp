@@ -26,6 +26,7 @@ std::string validateOptions(const OnlineEstimatorOptions& o) {
   if (!(o.update_budget_s > 0.0) || !std::isfinite(o.update_budget_s))
     return "update_budget_s must be > 0";
   if (!(o.refine_max_s > 0.0) || !std::isfinite(o.refine_max_s)) return "refine_max_s must be > 0";
+  if (o.migrant_queue_batches < 1) return "migrant_queue_batches must be >= 1";
   if (!o.estimate_values && o.wait_for_structure)
     return "estimate_values false shows a given model: it cannot wait for a structure to be chosen";
   return validateOptions(o.es);
@@ -413,7 +414,13 @@ bool OnlineEstimator::update() {
                          estimateMarkerNoise(window_data) >= options_.auto_noise_threshold_m);
   }
   es_->setCost(cost);  // re-evaluates the living population on the new window
+  window_start_time_s_ = window_data.times_s.front();
+  window_end_time_s_ = window_data.times_s.back();
   handOverRefinement();
+  // Other islands' migrants compete on this window; a population not drawn yet takes them
+  // after its first generation.
+  bool migrants_applied = !es_->population().empty();
+  if (migrants_applied) applyMigrants(version);
   // The generations that fit in the budget (at least one), at the pace of the ones done.
   const auto deadline = began + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                     std::chrono::duration<double>(options_.update_budget_s));
@@ -421,6 +428,10 @@ bool OnlineEstimator::update() {
     if (modelChangedSince(version)) return false;  // stale: the next update starts afresh
     const auto before = std::chrono::steady_clock::now();
     es_->step();
+    if (!migrants_applied) {
+      applyMigrants(version);
+      migrants_applied = true;
+    }
     const auto after = std::chrono::steady_clock::now();
     if (after + (after - before) > deadline) break;
   }

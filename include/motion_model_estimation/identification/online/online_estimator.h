@@ -19,6 +19,7 @@
 #include "motion_model_estimation/identification/search/evolution_strategy.h"
 #include "motion_model_estimation/identification/identifier.h"
 #include "motion_model_estimation/identification/estimators/output_error.h"
+#include "motion_model_estimation/identification/online/migrants.h"
 
 namespace mme {
 
@@ -55,6 +56,10 @@ struct OnlineEstimatorOptions {
   /// current window (cost, stability), once per new frame and never changes them.
   bool estimate_values = true;
   EsOptions es = onlineEsOptions();  ///< population, seed, threads, operators
+  /// Island model: batches of migrants waiting for the next update() at most; a batch arriving
+  /// at a full queue pushes out the oldest (counted in MigrationCounters::dropped), so a fast
+  /// or numerous set of peers never makes the queue grow.
+  int migrant_queue_batches = 8;
 };
 
 std::string validateOptions(const OnlineEstimatorOptions& options);
@@ -131,6 +136,17 @@ class OnlineEstimator {
   Trajectory window() const;
   /// The model with the best values filled in (the loaded model before the first update).
   Model currentModel() const;
+  /// Island model: copies of the `count` best individuals of the population with the parameter
+  /// names, generation, seed and window they belong to; no individual before the first update.
+  /// Thread-safe; waits for a running update(), so the worker calls it between its updates.
+  MigrantBatch emigrants(int count) const;
+  /// Island model (thread-safe, never waits for an update): queues `batch` for the next
+  /// update(), which re-evaluates its individuals on its window and lets them replace its worst
+  /// (EvolutionStrategy::immigrate). Returns "" when queued; else why it was refused (the
+  /// parameters differ by name or order, parameterMismatch; or the batch is malformed), and
+  /// nothing changes but the refused count.
+  std::string receiveMigrants(MigrantBatch batch);
+  MigrationCounters migrationCounters() const;
   /// Forgets the population (and the window when `clear_window`).
   void reset(bool clear_window);
   /// Replaces the model (same or different structure); the population restarts. Throws
@@ -201,6 +217,17 @@ class OnlineEstimator {
   bool use_output_error_ = false;   // decided when the population starts
   OutputErrorResult output_error_;  // the last output-error fit (ran = false before the first)
   uint32_t output_error_rejections_ = 0;  // fits not adopted (Estimate::output_error_rejections)
+  /// Applies the queued migrants to es_ (under update_mutex_); batches queued for an older
+  /// model are dropped.
+  void applyMigrants(uint64_t version);
+  struct QueuedBatch {
+    MigrantBatch batch;
+    uint64_t model_version = 0;  // the model whose parameter names it matched
+  };
+  mutable std::mutex migrants_mutex_;  // guards migrant_queue_ and migration_ (held briefly)
+  std::deque<QueuedBatch> migrant_queue_;
+  MigrationCounters migration_;
+  double window_start_time_s_ = 0.0, window_end_time_s_ = 0.0;  // es_'s window (update_mutex_)
   mutable std::mutex estimate_mutex_;  // guards estimate_ (readers never wait for an update)
   Estimate estimate_;
 };
