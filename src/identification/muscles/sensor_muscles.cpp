@@ -110,6 +110,11 @@ void checkInputs(const Model& passive, const Trajectory& data, const SensorMuscl
   checkRolloutOptions(o);
   checkOtherOptions(o);
   checkModelAndData(passive, data);
+  if (!finiteAtLeast(o.selection_tolerance, 0.0))
+    throw InputError("sensor muscles: the selection tolerance must be a finite number >= 0");
+  if (o.selection_max_solves < 1 || o.selection_max_solves > 100)
+    throw InputError("sensor muscles: selection_max_solves must be 1..100, got " +
+                     std::to_string(o.selection_max_solves));
   if (!(o.travel_body_sizes > 0.0) || !std::isfinite(o.travel_body_sizes))
     throw InputError("sensor muscles: travel_body_sizes must be a finite number > 0");
 }

@@ -86,6 +86,16 @@ struct SensorMuscleOptions {
   /// under way and the refits, and its result then depends on the machine's load
   /// (SensorMuscleResult::stopped_by_time says when the limit cut the search).
   double max_time_s = 0.0;
+  /// Grouped selection (docs/muscles.md, *Grouped selection*): after the one-step candidates,
+  /// the muscles and sensors the best one's equations do not support are removed by backward
+  /// elimination by group, priced like structure selection's units (the residual's rise against
+  /// the Bayesian information criterion's price of the parameters removed), and the selection is
+  /// adopted when its fit predicts the validation frames within selection_tolerance of the fit
+  /// without it (the smaller model wins a near tie, as among structure levels). The written model
+  /// then has the kept muscles and sensors only.
+  bool select_groups = true;
+  double selection_tolerance = 0.02;  ///< relative, >= 0
+  int selection_max_solves = 12;      ///< ridge solves the elimination may run (1..100)
   /// Skip the search where it cannot gain: the passive model already predicts the validation
   /// frames within what a perfect model makes from starts with the markers' noise, or its
   /// one-step residual (what the muscles fit) is only the markers' noise. The result then has
@@ -109,6 +119,11 @@ struct SensorMuscleResult {
   int sensors = 0, muscles = 0;
   size_t unknowns = 0;        ///< linear unknowns (muscles x (2 sensors + 3))
   size_t rows = 0;            ///< equations of the final fit (3 per particle and frame)
+  /// After the grouped selection (the layout's figures when none was adopted): the muscles and
+  /// sensors written and the unknowns left free (not dropped, not held at 0 by the layout),
+  /// to be read against `rows`, the samples they are fitted on.
+  int selected_muscles = 0, selected_sensors = 0;
+  size_t selected_parameters = 0;
   /// The candidates judged: windows x ridges in the options' order, then the rollout rounds.
   std::vector<SensorMuscleCandidate> candidates;
   int chosen = -1;            ///< the chosen candidate
