@@ -13,9 +13,10 @@
 // muscles and sensors (SensorMuscleOptions::select_groups off). --held-out: the written model and
 // the passive one also predict 10 frames ahead on the recording's frames after the fitted ones
 // (at most 1400, the fitted ones as history), as bench_paper's stages judge them. Prints the
-// muscle step's progress lines, then one line "muscles_s=... parameters=... samples=... kept=..."
+// muscle step's progress lines (each with the seconds since the step started), then one line "muscles_s=... parameters=... samples=... kept=..."
 // to compare builds in the same run.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -99,7 +100,14 @@ int main(int argc, char** argv) {
     o.sensors = a.sensors;
     o.skip_without_gain = !a.force;
     o.select_groups = !a.no_select;
-    if (!a.quiet) o.progress = [](const std::string& line) { std::printf("%s\n", line.c_str()); std::fflush(stdout); };
+    // Each progress line with the seconds since the step started: where the time goes.
+    const auto start = std::chrono::steady_clock::now();
+    if (!a.quiet)
+      o.progress = [start](const std::string& line) {
+        const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        std::printf("[%7.1f s] %s\n", s, line.c_str());
+        std::fflush(stdout);
+      };
     const mme::SensorMuscleResult r = mme::addSensorMuscles(passive, data, o);
     std::printf("muscles_s=%.2f sensors=%d muscles=%d parameters=%zu selected_sensors=%d selected_muscles=%d "
                 "selected_parameters=%zu samples=%zu validation_mm=%.3f "

@@ -24,8 +24,8 @@ using sensor_muscles::Budget;
 using sensor_muscles::fitSensorMuscles;
 using sensor_muscles::say;
 
-/// Unknowns at most: the normal matrix and its factor are two dense squares of this size
-/// (2 x 1.6 GB at 14000).
+/// Unknowns at most: the normal matrix is stored as its coupled blocks, but its sparse factor
+/// fills in and a solve's time grows with it.
 constexpr size_t kMaxUnknowns = 14000;
 
 bool finiteAtLeast(double value, double least) { return value >= least && std::isfinite(value); }

@@ -754,7 +754,7 @@ TEST(SensorMuscles, BadInputGetsClearErrors) {
   k.free = true;
   k.has_value = false;
   EXPECT_NE(message(unvalued, data, smallOptions()).find("has no value"), std::string::npos);
-  // Too many unknowns for the dense normal equations: refused before anything is allocated.
+  // Too many unknowns (max_unknowns): refused before anything is allocated.
   Model crowd;
   crowd.frame_rate_hz = 100;
   for (int i = 0; i < 60; ++i)

@@ -73,8 +73,8 @@ struct SensorMuscleOptions {
   /// A pair is a sensor or a neighbour muscle only when both particles are seen together in at
   /// least this share of the frames [0, 1].
   double min_seen_share = 0.9;
-  /// The linear unknowns at most (muscles x (2 sensors + 3), 1..14000): the normal matrix and
-  /// its factor are two dense squares of this size. A layout above it reads fewer sensors, the
+  /// The linear unknowns at most (muscles x (2 sensors + 3), 1..14000): the normal matrix is
+  /// stored as its coupled blocks, but its sparse factor fills in and the solves slow down. A layout above it reads fewer sensors, the
   /// most varying pairs kept, until it fits; when even one sensor is too many, InputError (with
   /// anchors_by_validation, the other layout is kept).
   size_t max_unknowns = 14000;
