@@ -80,18 +80,19 @@ std::vector<double> heldRises(const System& sys, int sensors, const Eigen::Vecto
   return rise;
 }
 
-/// The groups whose held rise is below the price of their free columns, cheapest first.
-std::vector<int> cheapGroups(const Groups& groups, const std::vector<double>& rise, double price_per_param) {
-  std::vector<int> cheap;
+/// The groups with free columns, by their held rise over the price of those columns, cheapest
+/// first.
+std::vector<int> rankedGroups(const Groups& groups, const std::vector<double>& rise, double price_per_param) {
+  std::vector<int> ranked;
   std::vector<double> ratio(groups.count(), 0.0);
   for (int g = 0; g < groups.count(); ++g) {
     const size_t params = groups.freeColumns(g).size();
     if (params == 0) continue;
     ratio[g] = rise[g] / (static_cast<double>(params) * price_per_param);
-    if (ratio[g] < 1.0) cheap.push_back(g);
+    ranked.push_back(g);
   }
-  std::stable_sort(cheap.begin(), cheap.end(), [&](int a, int b) { return ratio[a] < ratio[b]; });
-  return cheap;
+  std::stable_sort(ranked.begin(), ranked.end(), [&](int a, int b) { return ratio[a] < ratio[b]; });
+  return ranked;
 }
 
 }  // namespace
@@ -120,29 +121,29 @@ GroupSelection eliminateGroups(const System& sys, double ridge, const SignConstr
   report->rss_before = rss;
   report->price_per_param = rss / rows * std::log(rows);
   SignConstraints trial_constraints = constraints;
-  bool progress = true;
-  while (progress && report->solves < max_solves) {
-    progress = false;
-    std::vector<int> batch = cheapGroups(groups, heldRises(sys, sensors, *theta), report->price_per_param);
-    while (!batch.empty() && report->solves < max_solves) {
-      Groups trial = groups;
-      for (int g : batch) trial.hold(trial.freeColumns(g));
-      const int removed = groups.freeCount() - trial.freeCount();
-      trial_constraints.held_at_zero = trial.heldColumns();
-      Eigen::VectorXd refit;
-      ++report->solves;
-      if (solveRidge(sys, ridge, trial_constraints, &refit)) {
-        const double trial_rss = residualSquares(sys, refit);
-        if (trial_rss - rss <= removed * report->price_per_param) {
-          groups = trial;
-          *theta = refit;
-          rss = trial_rss;
-          progress = true;
-          break;
-        }
-      }
-      if (batch.size() == 1) break;
-      batch.resize((batch.size() + 1) / 2);  // the cheaper half
+  // The batch's size adapts: doubled after a removal is kept, halved after one is refused; a
+  // refused removal of the single cheapest group ends the elimination.
+  size_t batch_size = 1;
+  while (report->solves < max_solves) {
+    const std::vector<int> ranked = rankedGroups(groups, heldRises(sys, sensors, *theta), report->price_per_param);
+    if (ranked.empty()) break;
+    batch_size = std::min(batch_size, ranked.size());
+    Groups trial = groups;
+    for (size_t j = 0; j < batch_size; ++j) trial.hold(trial.freeColumns(ranked[j]));
+    const int removed = groups.freeCount() - trial.freeCount();
+    trial_constraints.held_at_zero = trial.heldColumns();
+    Eigen::VectorXd refit;
+    ++report->solves;
+    if (solveRidge(sys, ridge, trial_constraints, &refit) &&
+        residualSquares(sys, refit) - rss <= removed * report->price_per_param) {
+      groups = trial;
+      *theta = refit;
+      rss = residualSquares(sys, refit);
+      batch_size *= 2;
+    } else if (batch_size == 1) {
+      break;
+    } else {
+      batch_size /= 2;
     }
   }
   report->rss_after = rss;

@@ -37,13 +37,14 @@ struct EliminationReport {
 };
 
 /// Backward elimination by group on `sys` at the relative `ridge` under `constraints` (its
-/// held_at_zero columns stay held), from `theta`, the full fit at that ridge. Each pass ranks
-/// the groups by the residual's rise if each alone were removed with the others held (an upper
-/// bound of the rise after the refit: one block product each) over the price of its
-/// parameters; the groups below their price are removed together, refitted, and kept removed
-/// when the refit's rise stays below their summed price (otherwise the cheaper half is tried).
-/// The price: sigma^2 ln(rows) per parameter, sigma^2 the full fit's residual mean square.
-/// `theta` is replaced by the selected fit. At most `max_solves` ridge solves.
+/// held_at_zero columns stay held), from `theta`, the full fit at that ridge. Each step ranks
+/// the groups by the residual's rise if each alone were removed with the others held (one block
+/// product each; it overstates the rise after the refit where groups overlap, so it ranks and
+/// the refit decides) over the price of its parameters, removes the cheapest batch, refits,
+/// and keeps the removal when the refit's rise stays below the summed price of the parameters
+/// removed. The batch doubles after a kept removal and halves after a refused one; a refused
+/// single group ends it. The price: sigma^2 ln(rows) per parameter, sigma^2 the full fit's
+/// residual mean square. `theta` is replaced by the selected fit. At most `max_solves` solves.
 GroupSelection eliminateGroups(const System& sys, double ridge, const SignConstraints& constraints,
                                int sensors, int max_solves, Eigen::VectorXd* theta, EliminationReport* report);
 

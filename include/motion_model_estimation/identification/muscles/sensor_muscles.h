@@ -95,7 +95,7 @@ struct SensorMuscleOptions {
   /// then has the kept muscles and sensors only.
   bool select_groups = true;
   double selection_tolerance = 0.02;  ///< relative, >= 0
-  int selection_max_solves = 12;      ///< ridge solves the elimination may run (1..100)
+  int selection_max_solves = 24;      ///< ridge solves the elimination may run (1..100)
   /// Skip the search where it cannot gain: the passive model already predicts the validation
   /// frames within what a perfect model makes from starts with the markers' noise, or its
   /// one-step residual (what the muscles fit) is only the markers' noise. The result then has
