@@ -2,15 +2,15 @@
 // (sensors, muscles, parameters, fitted samples) and how it predicts its validation frames.
 //
 //   bench_sensor_muscles --model PASSIVE.yaml --trajectory FILE [--first-frame F] [--frames N]
-//                        [--sensors S] [--force] [--no-select] [--held-out] [--quiet]
+//                        [--sensors S] [--force] [--select] [--held-out] [--quiet]
 //   bench_sensor_muscles --random-object [--force] [--quiet]
 //
 // --random-object: the noiseless 18-marker random object (scenes/random_object.h), 300 frames
 // simulated, its true model as the passive one, the first 240 frames fitted. --force: the search
 // runs even where the gain gate would skip it (SensorMuscleOptions::skip_without_gain off).
 // PASSIVE.yaml is a passive model of FILE's markers (e.g. what identify writes before its muscle
-// step); the frames are those identify fitted. --no-select: without the grouped selection of
-// muscles and sensors (SensorMuscleOptions::select_groups off). --held-out: the written model and
+// step); the frames are those identify fitted. --select: with the grouped selection of muscles
+// and sensors (SensorMuscleOptions::select_groups, off by default; --no-select: off). --held-out: the written model and
 // the passive one also predict 10 frames ahead on the recording's frames after the fitted ones
 // (at most 1400, the fitted ones as history), as bench_paper's stages judge them. Prints the
 // muscle step's progress lines (each with the seconds since the step started), then one line "muscles_s=... parameters=... samples=... kept=..."
@@ -38,7 +38,7 @@ namespace {
 struct Args {
   std::string model, trajectory;
   int first_frame = 0, frames = -1, sensors = 16;
-  bool quiet = false, force = false, random_object = false, no_select = false, held_out = false;
+  bool quiet = false, force = false, random_object = false, no_select = false, select = false, held_out = false;
 };
 
 Args parse(int argc, char** argv) {
@@ -57,6 +57,7 @@ Args parse(int argc, char** argv) {
     else if (key == "--quiet") a.quiet = true;
     else if (key == "--force") a.force = true;
     else if (key == "--no-select") a.no_select = true;
+    else if (key == "--select") a.select = true;
     else if (key == "--held-out") a.held_out = true;
     else if (key == "--random-object") a.random_object = true;
     else throw std::runtime_error("unknown option " + key);
@@ -99,7 +100,7 @@ int main(int argc, char** argv) {
     mme::SensorMuscleOptions o;
     o.sensors = a.sensors;
     o.skip_without_gain = !a.force;
-    o.select_groups = !a.no_select;
+    o.select_groups = a.select && !a.no_select;
     // Each progress line with the seconds since the step started: where the time goes.
     const auto start = std::chrono::steady_clock::now();
     if (!a.quiet)

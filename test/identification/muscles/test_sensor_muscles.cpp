@@ -145,10 +145,10 @@ TEST(SensorMuscles, GroupedSelectionKeepsTheMuscleThatActsAndDropsMostOthers) {
   mme::addGaussianNoise(&setup.data, 1e-4, 5);
   const mme::Trajectory fitted = mme::sliceFrames(setup.data, 0, kFitted);
   mme::SensorMuscleOptions o = smallOptions();
+  o.select_groups = true;
   o.progress = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
   const mme::SensorMuscleResult r = mme::addSensorMuscles(setup.passive, fitted, o);
-  mme::SensorMuscleOptions off = smallOptions();
-  off.select_groups = false;
+  mme::SensorMuscleOptions off = smallOptions();  // the default: no selection
   const mme::SensorMuscleResult r0 = mme::addSensorMuscles(setup.passive, fitted, off);
   EXPECT_EQ(r0.selected_muscles, r0.muscles);
   EXPECT_EQ(r0.selected_sensors, r0.sensors);
