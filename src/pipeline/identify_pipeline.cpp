@@ -30,11 +30,18 @@ std::string sensorMuscleSummary(const SensorMuscleResult& sm, const SensorMuscle
                   sm.wall_time_s);
     return line;
   }
+  // After the grouped selection: the parameters left, and what it kept of the layout.
+  char selected[160] = "";
+  const bool pruned = sm.selected_muscles < sm.muscles || sm.selected_sensors < sm.sensors;
+  if (pruned)
+    std::snprintf(selected, sizeof(selected), " (the layout's %zu before the grouped selection, which kept %d "
+                  "sensors and %d muscles)", sm.unknowns, sm.selected_sensors, sm.selected_muscles);
   std::snprintf(line, sizeof(line),
-                "sensor muscles: %d sensors, %d muscles, ridge %.0e, %zu parameters on %zu samples, "
+                "sensor muscles: %d sensors, %d muscles, ridge %.0e, %zu parameters on %zu samples%s, "
                 "%d rollout round(s), activation time constant %.3g s, %s anchors; %d frames ahead on "
                 "the last frames %.3g m (passive %.3g m, constant velocity %.3g m), %.0f s%s%s%s",
-                sm.sensors, sm.muscles, sm.ridge, sm.unknowns, sm.rows,
+                sm.sensors, sm.muscles, sm.ridge,
+                pruned ? sm.selected_parameters : sm.unknowns, sm.rows, selected,
                 sm.candidates[sm.chosen].rollout_rounds,
                 sm.activation_time_s, sm.anchors ? "with" : "without", options.horizon_frames,
                 sm.validation_rms_m, sm.passive_rms_m, sm.constant_velocity_rms_m, sm.wall_time_s,

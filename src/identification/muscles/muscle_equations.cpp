@@ -19,6 +19,7 @@ MuscleEquations::MuscleEquations(const Model& passive, const Trajectory& data, c
     at_[layout.muscles[m].a].push_back({m, 1.0});
     at_[layout.muscles[m].b].push_back({m, -1.0});
   }
+  makePattern();
   computeScales();
 }
 
@@ -43,24 +44,26 @@ SignConstraints MuscleEquations::signConstraints(bool nonnegative_own_spring) co
   c.nonnegative_own_spring = nonnegative_own_spring;
   for (int m = 0; m < m_; ++m)
     if (layout_.no_own_stiffness[m]) c.held_at_zero.push_back(m * k_ + 2 * s_ + 1);
-  // The blocks a particle's equations fill (addEquation): every pair of its muscles.
-  c.coupled_below.assign(m_, {});
-  for (int i = 0; i < n_; ++i) {
-    if (passive_.particles[i].fixed) continue;
-    for (const auto& [m, sign] : at_[i])
-      for (const auto& [m2, sign2] : at_[i])
-        if (m2 <= m) c.coupled_below[m].push_back(m2);
-  }
-  for (std::vector<int>& below : c.coupled_below) {
-    std::sort(below.begin(), below.end());
-    below.erase(std::unique(below.begin(), below.end()), below.end());
-  }
+  c.sparse = true;
   c.cache = makeSparseRidgeCache();
   return c;
 }
 
+/// The blocks a particle's equations fill (addEquation): every pair of its muscles, at the
+/// particles that give equations.
+void MuscleEquations::makePattern() {
+  std::vector<std::vector<int>> coupled_below(m_);
+  for (int i = 0; i < n_; ++i) {
+    if (passive_.particles[i].fixed) continue;
+    for (const auto& [m, sign] : at_[i])
+      for (const auto& [m2, sign2] : at_[i])
+        if (m2 <= m) coupled_below[m].push_back(m2);
+  }
+  pattern_ = makeBlockPattern(m_, k_, std::move(coupled_below));
+}
+
 void MuscleEquations::accumulate(int window, int centre_begin, int centre_end, System* sys) const {
-  sizeSystem(unknowns(), sys);
+  sizeSystem(pattern_, sys);
   const int first = std::max(window, centre_begin);
   const int last = std::min(centre_end, data_.numFrames() - window);  // exclusive
   if (first >= last) return;
@@ -157,6 +160,7 @@ FramePieces MuscleEquations::pieces(const Frames3& frames) const {
 }
 
 void MuscleEquations::addPieces(const FramePieces& f, System* sys) const {
+  sizeSystem(pattern_, sys);
   for (int i = 0; i < n_; ++i)
     if (f.particle_ok[i]) addFrameEquation(i, f, sys);
 }
@@ -164,6 +168,7 @@ void MuscleEquations::addPieces(const FramePieces& f, System* sys) const {
 /// addEquation for one frame's rows of particle i: muscle m's gradient there is the rank-one
 /// (sign / mass) u_m phi_m^T, so each block of the normal matrix is the outer product
 /// phi_m phi_m2^T scaled by (u_m . u_m2) / mass^2, a third of the work of the general product.
+/// Only the blocks on and below the diagonal are kept (m2 <= m): the others are their transposes.
 void MuscleEquations::addFrameEquation(int i, const FramePieces& f, System* sys) const {
   const double mass = passive_.particles[i].mass_kg;
   const Eigen::Vector3d& y = f.y[i];
@@ -173,8 +178,9 @@ void MuscleEquations::addFrameEquation(int i, const FramePieces& f, System* sys)
     const double wm = sign / mass;
     sys->atb.segment(m * k_, k_).noalias() += (wm * f.u[m].dot(y)) * f.phi.col(m);
     for (const auto& [m2, sign2] : at_[i]) {
+      if (m2 > m) continue;
       const double c = wm * (sign2 / mass) * f.u[m].dot(f.u[m2]);
-      sys->ata.block(m * k_, m2 * k_, k_, k_).noalias() += c * f.phi.col(m) * f.phi.col(m2).transpose();
+      sys->block(m, m2).noalias() += c * f.phi.col(m) * f.phi.col(m2).transpose();
     }
   }
 }
@@ -186,7 +192,7 @@ void MuscleEquations::addEquation(int i, const Gradients& g, const Eigen::Vector
   for (const auto& [m, sign] : at_[i]) {
     sys->atb.segment(m * k_, k_).noalias() += g[m].transpose() * y;
     for (const auto& [m2, sign2] : at_[i])
-      sys->ata.block(m * k_, m2 * k_, k_, k_).noalias() += g[m].transpose() * g[m2];
+      if (m2 <= m) sys->block(m, m2).noalias() += g[m].transpose() * g[m2];
   }
 }
 

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -56,6 +57,8 @@ class MuscleEquations {
   const Eigen::VectorXd& inputScales() const { return z_scale_; }
   double elongationScaleM(int m) const { return e_scale_[m]; }
   double speedScaleMps(int m) const { return s_scale_[m]; }
+  /// The normal matrix's block pattern of this layout (every system it writes has it).
+  const std::shared_ptr<const BlockPattern>& pattern() const { return pattern_; }
   /// The solve's sign constraints for this layout.
   SignConstraints signConstraints(bool nonnegative_own_spring) const;
 
@@ -88,6 +91,7 @@ class MuscleEquations {
                       double* s) const;
   bool usable(const Frames3& f, int i, const std::vector<char>& muscle_ok) const;
   void findPartners();
+  void makePattern();
   void computeScales();
 
   const Model& passive_;
@@ -99,6 +103,7 @@ class MuscleEquations {
   std::vector<std::vector<int>> partners_;
   bool all_partners_ = false;
   std::vector<std::vector<std::pair<int, double>>> at_;  ///< per particle: (muscle, sign)
+  std::shared_ptr<const BlockPattern> pattern_;
   Eigen::VectorXd z_scale_;
   std::vector<double> e_scale_, s_scale_;
 };

@@ -49,10 +49,20 @@ Bond pairBond(const Model& model, const PairStats& pair) {
   return bond;
 }
 
-/// Appends the sensor bonds (springs of zero stiffness); returns their indices.
-std::vector<int> addSensorBonds(const Layout& layout, UniqueNames* names, Model* model) {
+/// The sensors a selection keeps (every one without a selection).
+std::vector<int> keptSensors(int sensors, const GroupSelection* selection) {
+  std::vector<int> kept;
+  for (int s = 0; s < sensors; ++s)
+    if (!selection || !selection->dropsSensor(s)) kept.push_back(s);
+  return kept;
+}
+
+/// Appends the bonds of the `kept` sensors (springs of zero stiffness); returns their indices.
+std::vector<int> addSensorBonds(const Layout& layout, const std::vector<int>& kept, UniqueNames* names,
+                                Model* model) {
   std::vector<int> sensor_bonds;
-  for (const PairStats& pair : layout.sensors) {
+  for (int s : kept) {
+    const PairStats& pair = layout.sensors[s];
     const std::string stem = "sensor_" + model->particles[pair.a].name + "_" + model->particles[pair.b].name;
     BondType type;
     type.name = names->type(stem);
@@ -84,9 +94,10 @@ std::vector<double> largestActivations(const MuscleEquations& eq, const Eigen::V
   return largest;
 }
 
-/// Muscle m's type: theta's block unscaled, the network's weights divided by the gain.
+/// Muscle m's type: theta's block unscaled, the network's weights divided by the gain, reading
+/// the `kept` sensors.
 BondType muscleType(const MuscleEquations& eq, int m, const Eigen::VectorXd& theta, double gain,
-                    double activation_time_s, const std::string& name) {
+                    double activation_time_s, const std::vector<int>& kept, const std::string& name) {
   const int s = eq.sensors(), k = eq.perMuscle();
   const Eigen::VectorXd th = theta.segment(m * k, k);
   BondType type;
@@ -97,29 +108,34 @@ BondType muscleType(const MuscleEquations& eq, int m, const Eigen::VectorXd& the
   type.param(kDamping) = fixed(th(2 * s + 2) / eq.speedScaleMps(m));
   type.param(kGain) = fixed(gain);
   if (activation_time_s > 0.0) type.param(kActivationTime) = fixed(activation_time_s);
-  type.network_inputs = s;
+  const int inputs = static_cast<int>(kept.size());
+  type.network_inputs = inputs;
   type.network_hidden = 0;
-  type.network.assign(muscleNetworkSize(s, 0), Param{});
-  for (int j = 0; j < 2 * s; ++j) type.network[j] = fixed(th(j) / eq.inputScale(j) / gain);
-  type.network[2 * s] = fixed(th(2 * s) / gain);
+  type.network.assign(muscleNetworkSize(inputs, 0), Param{});
+  for (int q = 0; q < inputs; ++q)
+    for (int j : {kept[q], s + kept[q]})
+      type.network[j < s ? q : inputs + q] = fixed(th(j) / eq.inputScale(j) / gain);
+  type.network[2 * inputs] = fixed(th(2 * s) / gain);
   return type;
 }
 
 }  // namespace
 
 Model buildMuscleModel(const MuscleEquations& eq, const Eigen::VectorXd& theta, double margin, int t_end,
-                       double activation_time_s) {
+                       double activation_time_s, const GroupSelection* selection) {
   Model model = eq.passive();
   UniqueNames names(model);
-  const std::vector<int> sensor_bonds = addSensorBonds(eq.layout(), &names, &model);
+  const std::vector<int> kept = keptSensors(eq.sensors(), selection);
+  const std::vector<int> sensor_bonds = addSensorBonds(eq.layout(), kept, &names, &model);
   // Each muscle's largest linear activation over the fitted frames sets its gain.
   const std::vector<double> largest = largestActivations(eq, theta, t_end);
   for (int m = 0; m < eq.muscles(); ++m) {
+    if (selection && selection->dropsMuscle(m)) continue;
     const PairStats& pair = eq.layout().muscles[m];
     const double gain = largest[m] > 0.0 ? margin * largest[m] : 1.0;
     const std::string name =
         names.type("muscle_" + model.particles[pair.a].name + "_" + model.particles[pair.b].name);
-    model.bond_types.push_back(muscleType(eq, m, theta, gain, activation_time_s, name));
+    model.bond_types.push_back(muscleType(eq, m, theta, gain, activation_time_s, kept, name));
     Bond bond = pairBond(model, pair);
     bond.inputs = sensor_bonds;
     model.bonds.push_back(bond);

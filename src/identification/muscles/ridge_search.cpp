@@ -11,10 +11,6 @@
 
 namespace mme::sensor_muscles {
 
-namespace {
-
-/// The candidate of one window and ridge, fitted on `sys` and judged; `theta` its fit (empty
-/// when the solve failed).
 SensorMuscleCandidate judgeRidge(const FitRun& run, const System& sys, int window, double ridge,
                                  Eigen::VectorXd* theta) {
   SensorMuscleCandidate c;
@@ -40,6 +36,8 @@ void sayCandidate(const FitRun& run, const SensorMuscleCandidate& c) {
                 c.bounded ? "bounded" : "unbounded");
   say(run.o, line);
 }
+
+namespace {
 
 /// The candidates of one window; false when the window gives no equation.
 bool judgeWindow(FitRun& run, int window) {

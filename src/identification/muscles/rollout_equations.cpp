@@ -12,7 +12,7 @@ RolloutEquations::RolloutEquations(const MuscleEquations& equations)
 
 RolloutCount RolloutEquations::accumulate(const Model& model, const RolloutSettings& settings, int start_begin,
                                           int start_end, System* sys) const {
-  sizeSystem(eq_.unknowns(), sys);
+  sizeSystem(eq_.pattern(), sys);
   Simulator sim(model);
   const int last = std::min(start_end, data_.numFrames() - settings.horizon_frames);  // exclusive
   RolloutCount count;

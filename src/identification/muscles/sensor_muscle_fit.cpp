@@ -29,10 +29,13 @@ FitRun::FitRun(const Model& passive_model, const Trajectory& data_frames, const 
   result.sensors = static_cast<int>(layout.sensors.size());
   result.muscles = static_cast<int>(layout.muscles.size());
   result.unknowns = unknownsOf(layout);
+  result.selected_muscles = result.muscles;
+  result.selected_sensors = result.sensors;
+  result.selected_parameters = result.unknowns - constraints.held_at_zero.size();
 }
 
 Model FitRun::build(const Eigen::VectorXd& theta, int t_end, double activation_time_s) const {
-  return buildMuscleModel(equations, theta, o.gain_margin, t_end, activation_time_s);
+  return buildMuscleModel(equations, theta, o.gain_margin, t_end, activation_time_s, &selection);
 }
 
 bool FitRun::solve(const System& sys, double ridge, Eigen::VectorXd* theta, double reference_diagonal) const {
@@ -66,6 +69,7 @@ SensorMuscleResult fitSensorMuscles(const Model& passive, const Trajectory& data
   // model, no rollout round and no activation time constant; the final refits are not cut (a
   // refit that leaves the data is common, and the next candidate's is what gives a model).
   judgeOneStepCandidates(run);
+  selectGroups(run);
   judgeRolloutRounds(run);
   refitOnEveryFrame(run);
   return std::move(run.result);

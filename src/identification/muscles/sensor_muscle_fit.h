@@ -1,6 +1,9 @@
 // One layout's sensor-muscle fit (docs/muscles.md, *Fit*), in steps that share a FitRun:
 //   1. judgeOneStepCandidates (ridge_search.cpp): the one-step fit on the frames before the
 //      validation frames, per window and ridge, each judged on the validation frames;
+//   1b. selectGroups (group_selection_step.cpp): the muscles and sensors the best one-step fit's
+//      data support (group_selection.h), adopted when the selected fit predicts the validation
+//      frames as well; every later fit then holds the dropped ones at 0;
 //   2. judgeRolloutRounds (rollout_rounds.cpp): rounds of rollout equations from the best
 //      candidates, each round a candidate of its own;
 //   3. refitOnEveryFrame (final_refit.cpp): the best candidate refitted on every frame, with its
@@ -14,6 +17,7 @@
 #include <Eigen/Core>
 
 #include "fit_budget.h"
+#include "group_selection.h"
 #include "motion_model_estimation/core/model.h"
 #include "motion_model_estimation/core/trajectory.h"
 #include "motion_model_estimation/identification/muscles/sensor_muscles.h"
@@ -62,7 +66,8 @@ struct FitRun {
   const MuscleEquations equations;
   const RolloutEquations rollouts;
   const ValidationJudge judge;
-  const SignConstraints constraints;
+  SignConstraints constraints;  ///< with the selection's dropped columns once one is adopted
+  GroupSelection selection;     ///< the adopted selection (empty: none)
 
   SensorMuscleResult result;            ///< result.candidates: every candidate judged so far
   std::vector<Eigen::VectorXd> thetas;  ///< per candidate, its validation fit (empty: the solve failed)
@@ -74,9 +79,22 @@ struct FitRun {
 /// is not, else as bounded and with a lower error.
 bool candidateBeats(const SensorMuscleCandidate& c, const SensorMuscleCandidate* best);
 
+/// The candidate of one window and ridge, fitted on `sys` and judged; `theta` its fit (empty
+/// when the solve failed).
+SensorMuscleCandidate judgeRidge(const FitRun& run, const System& sys, int window, double ridge,
+                                 Eigen::VectorXd* theta);
+
+/// A one-step candidate's progress line.
+void sayCandidate(const FitRun& run, const SensorMuscleCandidate& c);
+
 /// Step 1: the one-step candidates (windows x ridges). Throws InputError when no frame gives an
 /// equation or no candidate gives a model.
 void judgeOneStepCandidates(FitRun& run);
+
+/// Step 1b: grouped selection of muscles and sensors on the best candidate's equations at its
+/// ridge (SensorMuscleOptions::select_groups); when adopted, the candidates of the best one's
+/// window are fitted and judged again with it.
+void selectGroups(FitRun& run);
 
 /// Step 2: rounds of rollout equations from the best window-1 candidate, from the ridges below it
 /// and from the lowest-error one (docs/muscles.md, *Rollout equations*).

@@ -24,8 +24,8 @@ using sensor_muscles::Budget;
 using sensor_muscles::fitSensorMuscles;
 using sensor_muscles::say;
 
-/// Unknowns at most: the normal matrix and its factor are two dense squares of this size
-/// (2 x 1.6 GB at 14000).
+/// Unknowns at most: the normal matrix is stored as its coupled blocks, but its sparse factor
+/// fills in and a solve's time grows with it.
 constexpr size_t kMaxUnknowns = 14000;
 
 bool finiteAtLeast(double value, double least) { return value >= least && std::isfinite(value); }
@@ -110,6 +110,11 @@ void checkInputs(const Model& passive, const Trajectory& data, const SensorMuscl
   checkRolloutOptions(o);
   checkOtherOptions(o);
   checkModelAndData(passive, data);
+  if (!finiteAtLeast(o.selection_tolerance, 0.0))
+    throw InputError("sensor muscles: the selection tolerance must be a finite number >= 0");
+  if (o.selection_max_solves < 1 || o.selection_max_solves > 100)
+    throw InputError("sensor muscles: selection_max_solves must be 1..100, got " +
+                     std::to_string(o.selection_max_solves));
   if (!(o.travel_body_sizes > 0.0) || !std::isfinite(o.travel_body_sizes))
     throw InputError("sensor muscles: travel_body_sizes must be a finite number > 0");
 }

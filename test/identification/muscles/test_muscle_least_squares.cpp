@@ -20,15 +20,24 @@ constexpr int kMuscles = 7;
 /// Which muscles act on each particle: a chain with a few long links, as a body's bonds are.
 const std::vector<std::vector<int>> kAtParticle = {{0, 1, 5}, {1, 2}, {2, 3, 6}, {3, 4, 5}, {4, 0, 6}};
 
+/// The blocks the particles couple.
+std::vector<std::vector<int>> coupledBelow() {
+  std::vector<std::vector<int>> below(kMuscles);
+  for (const std::vector<int>& muscles : kAtParticle)
+    for (int m : muscles)
+      for (int m2 : muscles)
+        if (m2 <= m) below[m].push_back(m2);
+  return below;
+}
+
 /// Adds `rows` random equations per particle, each touching only that particle's muscles.
-void addRows(int rows, unsigned seed, System* sys) {
+/// (`dense`, when given: the same rows' whole normal matrix, accumulated densely.)
+void addRows(int rows, unsigned seed, System* sys, Eigen::MatrixXd* dense = nullptr) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);
   const int n = kMuscles * kPerMuscle;
-  if (sys->ata.rows() == 0) {
-    sys->ata = Eigen::MatrixXd::Zero(n, n);
-    sys->atb = Eigen::VectorXd::Zero(n);
-  }
+  mme::sensor_muscles::sizeSystem(mme::sensor_muscles::makeBlockPattern(kMuscles, kPerMuscle, coupledBelow()),
+                                  sys);
   for (const std::vector<int>& muscles : kAtParticle)
     for (int r = 0; r < rows; ++r) {
       Eigen::VectorXd row = Eigen::VectorXd::Zero(n);
@@ -37,7 +46,15 @@ void addRows(int rows, unsigned seed, System* sys) {
       // The truth alternates signs so that some own stiffnesses and dampings would be negative.
       double y = normal(rng);
       for (int j = 0; j < n; ++j) y += (j % 3 == 0 ? -1.0 : 1.0) * row(j);
-      sys->ata += row * row.transpose();
+      for (int m : muscles)
+        for (int m2 : muscles)
+          if (m2 <= m)
+            sys->block(m, m2) += row.segment(m * kPerMuscle, kPerMuscle) *
+                                 row.segment(m2 * kPerMuscle, kPerMuscle).transpose();
+      if (dense) {
+        if (dense->rows() == 0) *dense = Eigen::MatrixXd::Zero(n, n);
+        *dense += row * row.transpose();
+      }
       sys->atb += y * row;
       sys->btb += y * y;
       ++sys->rows;
@@ -53,18 +70,10 @@ SignConstraints denseConstraints() {
   return c;
 }
 
-/// The same constraints with the blocks the particles couple: the sparse path.
+/// The same constraints solved as a sparse matrix: the sparse path.
 SignConstraints sparseConstraints() {
   SignConstraints c = denseConstraints();
-  c.coupled_below.assign(kMuscles, {});
-  for (const std::vector<int>& muscles : kAtParticle)
-    for (int m : muscles)
-      for (int m2 : muscles)
-        if (m2 <= m) c.coupled_below[m].push_back(m2);
-  for (std::vector<int>& below : c.coupled_below) {
-    std::sort(below.begin(), below.end());
-    below.erase(std::unique(below.begin(), below.end()), below.end());
-  }
+  c.sparse = true;
   c.cache = mme::sensor_muscles::makeSparseRidgeCache();
   return c;
 }
@@ -93,6 +102,27 @@ TEST(MuscleLeastSquares, TheSparseFactorisationGivesTheDenseAnswerAtEveryRidge) 
   ASSERT_TRUE(mme::sensor_muscles::solveRidge(sys, 0.3, dense, &a));
   ASSERT_TRUE(mme::sensor_muscles::solveRidge(sys, 0.3, sparse, &b));
   EXPECT_LT((a - b).norm(), 1e-9 * (1.0 + a.norm()));
+}
+
+TEST(MuscleLeastSquares, TheBlocksHoldTheWholeNormalMatrixAndOnlyItsCoupledBlocks) {
+  System sys;
+  Eigen::MatrixXd dense;
+  addRows(20, 3, &sys, &dense);
+  // Stored: the coupled blocks on and below the diagonal, not the 28 of a dense lower triangle.
+  EXPECT_EQ(sys.pattern->blocks, 20);
+  EXPECT_EQ(static_cast<int>(sys.blocks.size()), sys.pattern->blocks);
+  EXPECT_EQ(sys.pattern->find(2, 0), -1);  // muscles 0 and 2 never meet at a particle
+  EXPECT_LT((sys.dense() - dense).norm(), 1e-12 * dense.norm());
+  EXPECT_DOUBLE_EQ(sys.at(5, 30), dense(5, 30));
+  EXPECT_DOUBLE_EQ(sys.at(30, 5), dense(30, 5));
+  std::mt19937 rng(4);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::VectorXd theta(kMuscles * kPerMuscle);
+  for (int j = 0; j < theta.size(); ++j) theta(j) = normal(rng);
+  EXPECT_LT((sys.times(theta) - dense * theta).norm(), 1e-12 * (dense * theta).norm());
+  const double squares = sys.btb - 2.0 * theta.dot(sys.atb) + theta.dot(dense * theta);
+  EXPECT_NEAR(mme::sensor_muscles::residualSquares(sys, theta), squares, 1e-10 * squares);
+  EXPECT_NEAR(mme::sensor_muscles::meanDiagonal(sys), dense.diagonal().mean(), 1e-12 * dense.diagonal().mean());
 }
 
 }  // namespace

@@ -73,8 +73,8 @@ struct SensorMuscleOptions {
   /// A pair is a sensor or a neighbour muscle only when both particles are seen together in at
   /// least this share of the frames [0, 1].
   double min_seen_share = 0.9;
-  /// The linear unknowns at most (muscles x (2 sensors + 3), 1..14000): the normal matrix and
-  /// its factor are two dense squares of this size. A layout above it reads fewer sensors, the
+  /// The linear unknowns at most (muscles x (2 sensors + 3), 1..14000): the normal matrix is
+  /// stored as its coupled blocks, but its sparse factor fills in and the solves slow down. A layout above it reads fewer sensors, the
   /// most varying pairs kept, until it fits; when even one sensor is too many, InputError (with
   /// anchors_by_validation, the other layout is kept).
   size_t max_unknowns = 14000;
@@ -86,6 +86,17 @@ struct SensorMuscleOptions {
   /// under way and the refits, and its result then depends on the machine's load
   /// (SensorMuscleResult::stopped_by_time says when the limit cut the search).
   double max_time_s = 0.0;
+  /// Grouped selection (docs/muscles.md, *Grouped selection*): after the one-step candidates,
+  /// the muscles and sensors the best one's equations do not support are removed by backward
+  /// elimination by group, priced like structure selection's units (the residual's rise against
+  /// the Bayesian information criterion's price of the parameters removed), and the selection is
+  /// adopted when its fit predicts the validation frames within selection_tolerance of the fit
+  /// without it (the smaller model wins a near tie, as among structure levels). The written model
+  /// then has the kept muscles and sensors only. Off by default: on the real walks measured its
+  /// price removed far more than the validation frames bore, and it was not adopted.
+  bool select_groups = false;
+  double selection_tolerance = 0.02;  ///< relative, >= 0
+  int selection_max_solves = 24;      ///< ridge solves the elimination may run (1..100)
   /// Skip the search where it cannot gain: the passive model already predicts the validation
   /// frames within what a perfect model makes from starts with the markers' noise, or its
   /// one-step residual (what the muscles fit) is only the markers' noise. The result then has
@@ -109,6 +120,11 @@ struct SensorMuscleResult {
   int sensors = 0, muscles = 0;
   size_t unknowns = 0;        ///< linear unknowns (muscles x (2 sensors + 3))
   size_t rows = 0;            ///< equations of the final fit (3 per particle and frame)
+  /// After the grouped selection (the layout's figures when none was adopted): the muscles and
+  /// sensors written and the unknowns left free (not dropped, not held at 0 by the layout),
+  /// to be read against `rows`, the samples they are fitted on.
+  int selected_muscles = 0, selected_sensors = 0;
+  size_t selected_parameters = 0;
   /// The candidates judged: windows x ridges in the options' order, then the rollout rounds.
   std::vector<SensorMuscleCandidate> candidates;
   int chosen = -1;            ///< the chosen candidate
