@@ -392,7 +392,7 @@ TEST(OutputError, ExactJacobiansReachTheFiniteDifferencesAnswer) {
 }
 
 // The soft-continuity stage is only a waypoint: stopped once its cost changes by less than
-// 1e-5 per iteration (the default) instead of run to 1e-14, the fit lands on the same optimum in
+// 0.1 % per iteration (the default) instead of run to 1e-14, the fit lands on the same optimum in
 // far fewer iterations. A damped random object lets its dampers press on their lower bounds while
 // the segments follow their own data, where Ceres' projected steps creep for dozens of
 // iterations.
