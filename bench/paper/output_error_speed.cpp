@@ -182,6 +182,7 @@ void randomObjectFits(const Settings& s, std::FILE* f, const char* name, const m
   printSegmentFill(name, truth, clean, mme::OutputErrorOptions().segment_frames);
   mme::OutputErrorOptions exact;
   exact.linear_solver = fastest.second;
+  exact.first_stage_function_tolerance = 1e-3;  // the soft stage as a waypoint
   const double exact_s = fitCase(s, f, c, fastest.first, exact).wall_time_s;
   // The fit before the soft stage became a waypoint: run to the hard stage's precision.
   mme::OutputErrorOptions exact_waypoint = exact;
@@ -212,8 +213,8 @@ void randomObjectFits(const Settings& s, std::FILE* f, const char* name, const m
 /// `--only oe_speed_small` instead: random18's object with damped types (18 markers, 12 types,
 /// 36 unknowns), the whole fits both ways and its bound (minutes, where random43's take hours on
 /// a loaded machine), and random43's segment fill.
-/// Each random object's whole fits: exact Jacobians with the default waypoint soft stage, the
-/// same with the soft stage run to 1e-14 (the fit before the waypoint), and forward differences
+/// Each random object's whole fits: exact Jacobians with the soft stage as a waypoint (1e-3), the
+/// same with the soft stage run to 1e-14 (the default), and forward differences
 /// with the soft stage to 1e-14 (the fit before exact Jacobians), in one run; before them the
 /// fill of a segment's Jacobian (printSegmentFill).
 void outputErrorSpeed(const Settings& s) {
