@@ -58,9 +58,8 @@ struct OutputErrorOptions {
   /// below this (Ceres' function tolerance). Its answer is only the hard stage's start, so it
   /// need not be exact; and with a parameter pressed on a bound (dampers near 0 while every
   /// segment follows its own data) Ceres' projected steps creep there for dozens of iterations
-  /// that change nothing the hard stage keeps. 1e-14 (the default) runs it to the hard stage's
-  /// precision: 1e-3 saves most of those iterations on damped objects but made the 1 mm rows of
-  /// the accuracy bench worse (docs/estimators.md, "The output error's time").
+  /// that change nothing the hard stage keeps: 1e-3 saves most of them on damped objects. 1e-14
+  /// (the default) runs it to the hard stage's precision.
   double first_stage_function_tolerance = 1e-14;
   double noise_std_m = 0.0;         ///< marker noise; 0 = estimated (estimateMarkerNoise)
   int max_iterations = 100;
