@@ -10,6 +10,7 @@
 #include "common.h"
 #include "experiments.h"
 #include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/identification/estimators/motion_sensitivity.h"
 #include "motion_model_estimation/identification/estimators/output_error.h"
 #include "motion_model_estimation/identification/search/parameter_space.h"
 #include "motion_model_estimation/identification/structure/marker_model.h"
@@ -50,17 +51,17 @@ mme::OutputErrorResult fitCase(const Settings& s, std::FILE* f, const Case& c, c
   for (size_t k = 0; k < c.truth.size(); ++k) errors.push_back(100.0 * std::abs(r.values[k] / c.truth[k] - 1.0));
   const double median = medianOf(errors);
   const int iterations = std::max(1, r.iterations);
-  std::fprintf(f, "%s,%s,%s,%zu,%d,%d,%.3f,%.3f,%.3f,%d,%.4f,%d,%.6g,%.6g,%.4g\n", c.name.c_str(),
+  std::fprintf(f, "%s,%s,%s,%zu,%d,%d,%.3f,%.3f,%.3f,%d,%.4f,%d,%.6g,%.6g,%.4g,%.0e\n", c.name.c_str(),
                jacobianName(o.jacobian), solver_name, c.space->size(), c.data.numFrames(), o.max_iterations,
                r.wall_time_s, r.jacobian_time_s, r.linear_solver_time_s, r.iterations,
                r.wall_time_s / iterations, r.converged ? 1 : 0, median, c.bound_median_percent,
-               median / c.bound_median_percent);
+               median / c.bound_median_percent, o.first_stage_function_tolerance);
   std::fflush(f);
   std::printf("oe_speed: %s %-18s %-22s %8.2f s (Jacobians %.2f s, linear solver %.2f s), %3d "
-              "iterations (%.3f s each), %s, cost %.6g m^2", c.name.c_str(), jacobianName(o.jacobian),
-              solver_name, r.wall_time_s, r.jacobian_time_s, r.linear_solver_time_s, r.iterations,
-              r.wall_time_s / iterations, r.converged ? "converged" : "not converged",
-              r.observation_cost_m2);
+              "iterations (%.3f s each; soft stage to %.0e), %s, cost %.6g m^2", c.name.c_str(),
+              jacobianName(o.jacobian), solver_name, r.wall_time_s, r.jacobian_time_s, r.linear_solver_time_s,
+              r.iterations, r.wall_time_s / iterations, o.first_stage_function_tolerance,
+              r.converged ? "converged" : "not converged", r.observation_cost_m2);
   if (!c.truth.empty())
     std::printf(", median error %.4g %% = %.2f x the bound", median, median / c.bound_median_percent);
   std::printf("; jacobian: %s\n", r.jacobian.c_str());
@@ -74,6 +75,58 @@ const std::vector<std::pair<const char*, mme::OutputErrorLinearSolver>>& solvers
       {"sparse_schur", mme::OutputErrorLinearSolver::kSparseSchur},
       {"iterative_schur", mme::OutputErrorLinearSolver::kIterativeSchur}};
   return kSolvers;
+}
+
+/// How sparse a shooting segment's Jacobian could be made: the fraction of (particle, column
+/// block) pairs, the blocks being each bond type's parameters and each particle's start state,
+/// where the particle's rows over the segment's frames reach `tolerance` x the block's largest
+/// entry in the segment (0: structurally non-zero). The sensitivities from the truth's state at
+/// frame 20 of `clean`, over `frames` frames. Ceres' products scale with the square of it.
+void printSegmentFill(const char* name, const Model& truth, const mme::Trajectory& clean, int frames) {
+  const std::vector<mme::ParamRef> refs = mme::freeParameters(truth);
+  const int n = static_cast<int>(truth.particles.size()), types = static_cast<int>(truth.bond_types.size());
+  mme::MotionSensitivity sens(truth, refs);
+  mme::State state;
+  const int t0 = std::min(20, clean.numFrames() - 2);
+  for (int i = 0; i < n; ++i) {
+    state.x_m.push_back(clean.position(t0, i));
+    state.v_mps.push_back((clean.position(t0 + 1, i) - clean.position(t0 - 1, i)) * (0.5 * truth.frame_rate_hz));
+  }
+  sens.start(state);
+  const int np = static_cast<int>(refs.size()), blocks = types + 1 + n;  // types, gravity, particles
+  std::vector<int> block_of(sens.columns());
+  for (int c = 0; c < sens.columns(); ++c) {
+    if (c >= np) block_of[c] = types + 1 + (c - np) / 6;  // a free particle's x and v h
+    else block_of[c] = refs[c].bond_type < 0 ? types : refs[c].bond_type;
+  }
+  std::vector<double> largest(static_cast<size_t>(n) * blocks, 0.0), block_largest(blocks, 0.0);
+  std::vector<uint8_t> used(blocks, 0);
+  for (int t = 0; t < frames; ++t) {
+    sens.stepFrame(1.0 / truth.frame_rate_hz);
+    for (int i = 0; i < n; ++i)
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < sens.columns(); ++c) {
+          const double v = std::abs(sens.dx()(3 * i + r, c));
+          double& cell = largest[static_cast<size_t>(i) * blocks + block_of[c]];
+          cell = std::max(cell, v);
+          block_largest[block_of[c]] = std::max(block_largest[block_of[c]], v);
+          used[block_of[c]] = 1;
+        }
+  }
+  std::printf("oe_speed: %s: fill of a %d-frame segment's Jacobian per (particle, bond type or particle "
+              "state):", name, frames);
+  for (double tolerance : {0.0, 1e-12, 1e-9, 1e-6, 1e-3}) {
+    long kept = 0, all = 0;
+    for (int i = 0; i < n; ++i)
+      for (int b = 0; b < blocks; ++b) {
+        if (!used[b]) continue;
+        ++all;
+        kept += largest[static_cast<size_t>(i) * blocks + b] > tolerance * block_largest[b] ? 1 : 0;
+      }
+    std::printf(" %.0e: %.2f", tolerance, static_cast<double>(kept) / std::max(1L, all));
+  }
+  std::printf("\n");
+  std::fflush(stdout);
 }
 
 /// One random object's fits (see outputErrorSpeed); `probes`: first the time of an iteration of
@@ -126,14 +179,23 @@ void randomObjectFits(const Settings& s, std::FILE* f, const char* name, const m
   c.bound_median_percent = medianOf(bound_rel);
   std::printf("oe_speed: %s: %zu unknowns, %d frames, Cramer-Rao bound median %.4g %% (%.1f s)\n",
               name, c.truth.size(), frames, c.bound_median_percent, bound_s);
+  printSegmentFill(name, truth, clean, mme::OutputErrorOptions().segment_frames);
   mme::OutputErrorOptions exact;
   exact.linear_solver = fastest.second;
+  exact.first_stage_function_tolerance = 1e-3;  // the soft stage as a waypoint
   const double exact_s = fitCase(s, f, c, fastest.first, exact).wall_time_s;
-  mme::OutputErrorOptions today;
+  // The fit before the soft stage became a waypoint: run to the hard stage's precision.
+  mme::OutputErrorOptions exact_waypoint = exact;
+  exact_waypoint.first_stage_function_tolerance = 1e-14;
+  const double exact_waypoint_s = fitCase(s, f, c, fastest.first, exact_waypoint).wall_time_s;
+  mme::OutputErrorOptions today;  // the fit before exact Jacobians
   today.jacobian = mme::OutputErrorJacobian::kFiniteDifferences;
   today.linear_solver = mme::OutputErrorLinearSolver::kSparseNormalCholesky;
+  today.first_stage_function_tolerance = 1e-14;
   const double today_s = fitCase(s, f, c, solvers().front().first, today).wall_time_s;
-  std::printf("oe_speed: %s: today's fit / exact with %s = %.2f\n", name, fastest.first, today_s / exact_s);
+  std::printf("oe_speed: %s: soft stage to 1e-14 / to %.0e = %.2f; forward differences, soft stage to 1e-14 "
+              "/ exact with %s = %.2f\n", name, exact.first_stage_function_tolerance,
+              exact_waypoint_s / exact_s, fastest.first, today_s / exact_s);
 }
 
 }  // namespace
@@ -150,12 +212,16 @@ void randomObjectFits(const Settings& s, std::FILE* f, const char* name, const m
 ///   space's initial centres, a few iterations each way: the time per iteration.
 /// `--only oe_speed_small` instead: random18's object with damped types (18 markers, 12 types,
 /// 36 unknowns), the whole fits both ways and its bound (minutes, where random43's take hours on
-/// a loaded machine).
+/// a loaded machine), and random43's segment fill.
+/// Each random object's whole fits: exact Jacobians with the soft stage as a waypoint (1e-3), the
+/// same with the soft stage run to 1e-14 (the default), and forward differences
+/// with the soft stage to 1e-14 (the fit before exact Jacobians), in one run; before them the
+/// fill of a segment's Jacobian (printSegmentFill).
 void outputErrorSpeed(const Settings& s) {
   std::FILE* f = openCsv(s.out_dir + "/oe_speed.csv",
                          "case,jacobian,linear_solver,unknowns,frames,max_iterations,wall_s,jacobian_s,"
                          "linear_solver_s,iterations,s_per_iteration,converged,median_error_percent,"
-                         "bound_median_percent,error_over_bound");
+                         "bound_median_percent,error_over_bound,first_stage_function_tolerance");
   const int probe_iterations = s.quick ? 2 : 4;
   if (!s.wants("oe_speed_small")) {
     const std::string path = std::string(MME_TEST_DATA_DIR) + "/real/motion_capture_walk.trc";
@@ -179,15 +245,17 @@ void outputErrorSpeed(const Settings& s) {
     o.estimate_std = false;
     fitCase(s, f, c, solvers().front().first, o);
   }
-  if (!s.wants("oe_speed_small")) {
-    mme::RandomObjectSpec spec;  // as bench_paper's online experiment and the soak's big model
-    spec.particles = 43;
-    spec.bond_types = 91;
-    spec.bonds = 91;
-    spec.damping_max_nspm = 0.05;
-    randomObjectFits(s, f, "random43", spec, probe_iterations, true);
-  }
+  mme::RandomObjectSpec big;  // as bench_paper's online experiment and the soak's big model
+  big.particles = 43;
+  big.bond_types = 91;
+  big.bonds = 91;
+  big.damping_max_nspm = 0.05;
+  if (!s.wants("oe_speed_small")) randomObjectFits(s, f, "random43", big, probe_iterations, true);
   if (s.wants("oe_speed_small")) {
+    // The big object's fill too (one short simulation): its fits take hours on a loaded machine.
+    const Model truth = mme::makeRandomObject(big);
+    printSegmentFill("random43", truth, mme::simulateTrajectory(truth, 40, truth.frame_rate_hz),
+                     mme::OutputErrorOptions().segment_frames);
     mme::RandomObjectSpec spec;  // random18's object with damped types
     spec.damping_max_nspm = 0.05;
     randomObjectFits(s, f, "random18", spec, probe_iterations, false);

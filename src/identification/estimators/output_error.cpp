@@ -276,7 +276,9 @@ int solveWithContinuation(Problem* p, const OutputErrorOptions& options, double 
   if (options.first_continuity_weight > 0.0 && options.first_continuity_weight != options.continuity_weight) {
     p->w_cont = options.first_continuity_weight / noise_std_prior_m;
     for (auto& sim : u->sims) sim->invalidate();
-    ceres::Solve(solver, problem, summary);
+    ceres::Solver::Options first_stage = solver;
+    first_stage.function_tolerance = options.first_stage_function_tolerance;
+    ceres::Solve(first_stage, problem, summary);
     addTimes(*summary, out);
     first_stage_iterations = static_cast<int>(summary->iterations.size()) - 1;
     p->w_cont = hard_w_cont;
@@ -357,9 +359,10 @@ OutputErrorResult fitOnce(const Model& model, const Trajectory& trajectory,
   out.std_devs.assign(start_genes.size(), std::numeric_limits<double>::quiet_NaN());
   out.unidentifiable.assign(start_genes.size(), 0);
   if (options.segment_frames < 2 || !(options.continuity_weight > 0.0) ||
-      !(options.first_continuity_weight >= 0.0) || options.grow_segments < 0) {
-    out.reason = "segment_frames must be >= 2, continuity_weight > 0, first_continuity_weight >= 0 "
-                 "and grow_segments >= 0";
+      !(options.first_continuity_weight >= 0.0) || options.grow_segments < 0 ||
+      !(options.first_stage_function_tolerance > 0.0 && options.first_stage_function_tolerance < 1.0)) {
+    out.reason = "segment_frames must be >= 2, continuity_weight > 0, first_continuity_weight >= 0, "
+                 "grow_segments >= 0 and first_stage_function_tolerance in (0, 1)";
     return out;
   }
   auto p = std::make_unique<Problem>();

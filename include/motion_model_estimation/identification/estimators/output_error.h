@@ -54,6 +54,13 @@ struct OutputErrorOptions {
   /// one wrong motion over every segment), then from there with `continuity_weight`. Each stage
   /// gets max_iterations. 0 = one stage.
   double first_continuity_weight = 1.0;
+  /// Where the first (soft-continuity) stage stops: a relative change of the cost per iteration
+  /// below this (Ceres' function tolerance). Its answer is only the hard stage's start, so it
+  /// need not be exact; and with a parameter pressed on a bound (dampers near 0 while every
+  /// segment follows its own data) Ceres' projected steps creep there for dozens of iterations
+  /// that change nothing the hard stage keeps: 1e-3 saves most of them on damped objects. 1e-14
+  /// (the default) runs it to the hard stage's precision.
+  double first_stage_function_tolerance = 1e-14;
   double noise_std_m = 0.0;         ///< marker noise; 0 = estimated (estimateMarkerNoise)
   int max_iterations = 100;
   /// Start states from the model: each segment's start state (positions and velocities) is
