@@ -209,7 +209,7 @@ bool isTopicName(const std::string& name) {
 /// The island model (~islands/enabled, ~island_id, ~migration_*, ~migrants); after readSearch,
 /// which sets the population the migrants are taken from.
 void readIslands(const ParameterSource& params, EstimatorNodeOptions* options) {
-  IslandOptions& o = options->islands;
+  IslandLinkOptions& o = options->islands;
   std::string topic;
   const bool topic_set = params.get("migration_topic", &topic);
   if (topic_set) o.migration_topic = topic;

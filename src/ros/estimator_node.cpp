@@ -147,7 +147,7 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
                                                        options_.prediction_period_sec);
   stats_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), &EstimatorNode::onStatsTimer, this);
   if (options_.islands.enabled) {
-    IslandOptions islands = options_.islands;
+    IslandLinkOptions islands = options_.islands;
     if (islands.island_id.empty()) islands.island_id = ros::this_node::getName();
     try {
       islands_ = std::make_unique<IslandLink>(nh_, islands, estimator_.get());

@@ -6,7 +6,7 @@
 
 namespace mme {
 
-IslandLink::IslandLink(ros::NodeHandle& nh, const IslandOptions& options, OnlineEstimator* estimator)
+IslandLink::IslandLink(ros::NodeHandle& nh, const IslandLinkOptions& options, OnlineEstimator* estimator)
     : options_(options), estimator_(estimator) {
   publisher_ = nh.advertise<motion_model_estimation::Migrants>(options_.migration_topic, 10);
   // No Nagle delay: a batch is one small message, and it should arrive well within a period.

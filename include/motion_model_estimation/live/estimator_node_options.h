@@ -26,7 +26,7 @@ enum class InputType {
 /// The island model: estimators with their own seeds on the same stream exchange their best
 /// individuals on one shared topic (docs/node.md, "Islands"). Off unless ~islands/enabled is true,
 /// or ~migration_topic is set non-empty and ~islands/enabled is not set.
-struct IslandOptions {
+struct IslandLinkOptions {
   bool enabled = false;
   std::string island_id;                           ///< "" = the node's name (filled by the node)
   std::string migration_topic = "/mme/migrants";   ///< shared by every island (absolute)
@@ -67,7 +67,7 @@ struct EstimatorNodeOptions {
   /// (~muscles_max_time_sec), the refit period (~muscle_refit_period_sec); min_frames follows
   /// ~window_frames.
   MuscleJobOptions muscles = defaultMuscleJobOptions();
-  IslandOptions islands;
+  IslandLinkOptions islands;
   OnlineEstimatorOptions estimator;
 };
 

@@ -25,7 +25,7 @@ class IslandLink {
  public:
   /// Advertises and subscribes `options.migration_topic` on `nh`; `options.island_id` must be
   /// set. `estimator` outlives the link.
-  IslandLink(ros::NodeHandle& nh, const IslandOptions& options, OnlineEstimator* estimator);
+  IslandLink(ros::NodeHandle& nh, const IslandLinkOptions& options, OnlineEstimator* estimator);
   /// Called by the worker after each update: emigrates when a period has passed since the last
   /// emigration (a new population, after ~reset or a new model, starts the count again).
   /// Publishing only queues the message, so the worker never waits for a peer.
@@ -36,7 +36,7 @@ class IslandLink {
  private:
   void onMigrants(const motion_model_estimation::Migrants::ConstPtr& msg);
 
-  const IslandOptions options_;
+  const IslandLinkOptions options_;
   OnlineEstimator* const estimator_;
   ros::Publisher publisher_;
   ros::Subscriber subscriber_;
