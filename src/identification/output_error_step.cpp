@@ -93,7 +93,8 @@ OutputErrorOutcome OutputErrorStep::run(const std::vector<double>& one_step_gene
   // Another integrator than the one-step answer's: compared by the output-error cost as the trial
   // did (the first scout's start is the one-step answer's), a blow-up never adopted.
   const bool adopt = model_.substeps == coarse_substeps
-                         ? replacesStanding(best_rms_m, out_.one_step_judged_rms_m)
+                         ? outputErrorReplacesOneStep(best_rms_m, out_.one_step_judged_rms_m,
+                                                      best.noise_std_m, noise_estimate_m_)
                          : !std::isinf(best_rms_m) && best.observation_cost_m2 <= one_step_oe_cost_m2_;
   if (!adopt) {
     note_("warning: " + figures + ": the output error's answer is worse and not adopted, the one-step answer is kept");
@@ -101,6 +102,9 @@ OutputErrorOutcome OutputErrorStep::run(const std::vector<double>& one_step_gene
     out_.std_missing_reason.clear();
     return out_;
   }
+  if (!replacesStanding(best_rms_m, out_.one_step_judged_rms_m) && model_.substeps == coarse_substeps)
+    figures += ", but its residuals (" + formatValue(best.noise_std_m) + " m) are at the markers' noise (" +
+               formatValue(noise_estimate_m_) + " m), where predictions from noisy starts cannot tell the two apart";
   note_(figures + ": the output error's answer is adopted");
   out_.adopted = true;
   out_.fit = best;

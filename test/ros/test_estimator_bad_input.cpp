@@ -180,14 +180,4 @@ TEST(EstimatorNode, SurvivesAndCountsBadInput) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_estimator_bad_input");
-  if (!mmetest::masterAnswers()) return 2;
-  ros::NodeHandle nh;
-  ros::AsyncSpinner spinner(1);
-  spinner.start();
-  const int rc = RUN_ALL_TESTS();
-  spinner.stop();
-  return rc;
-}
+int main(int argc, char** argv) { return mmetest::runRosTests(argc, argv, "test_estimator_bad_input"); }

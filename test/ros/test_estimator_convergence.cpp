@@ -287,14 +287,4 @@ TEST(EstimatorNode, ConvergesToTheTruth) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_estimator_convergence");
-  if (!mmetest::masterAnswers()) return 2;
-  ros::NodeHandle nh;  // keeps the node alive for the spinner
-  ros::AsyncSpinner spinner(1);
-  spinner.start();
-  const int rc = RUN_ALL_TESTS();
-  spinner.stop();
-  return rc;
-}
+int main(int argc, char** argv) { return mmetest::runRosTests(argc, argv, "test_estimator_convergence"); }

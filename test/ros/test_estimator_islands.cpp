@@ -141,14 +141,4 @@ TEST(EstimatorIslands, KillOne) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_estimator_islands");
-  if (!mmetest::masterAnswers()) return 2;
-  ros::NodeHandle nh;
-  ros::AsyncSpinner spinner(1);
-  spinner.start();
-  const int rc = RUN_ALL_TESTS();
-  spinner.stop();
-  return rc;
-}
+int main(int argc, char** argv) { return mmetest::runRosTests(argc, argv, "test_estimator_islands"); }

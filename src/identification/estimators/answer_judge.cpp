@@ -48,6 +48,14 @@ bool replacesStanding(double candidate_rms_m, double standing_rms_m) {
   return candidate_rms_m <= (1.0 + kJudgeTolerance) * standing_rms_m;
 }
 
+bool outputErrorReplacesOneStep(double output_error_rms_m, double one_step_rms_m,
+                                double residual_std_m, double noise_std_m) {
+  if (replacesStanding(output_error_rms_m, one_step_rms_m)) return true;
+  const bool at_noise = std::isfinite(residual_std_m) && noise_std_m > 0.0 &&
+                        residual_std_m <= kAtNoiseFactor * noise_std_m;
+  return at_noise && std::isfinite(output_error_rms_m);
+}
+
 std::string formatJudged(double rms_m) {
   if (std::isinf(rms_m)) return "blew up";
   if (std::isnan(rms_m)) return "not judged";

@@ -127,7 +127,7 @@ bool staysBounded(const Model& best, const Trajectory& window, int rollout_frame
 
 /// Whether an output-error fit on `window` may replace the one-step answer at `one_step_genes`:
 /// finite, not far above its start's cost (a fit that blew up on the way), and judged K frames
-/// ahead on the window no worse (answer_judge.h).
+/// ahead on the window no worse or with residuals at the noise (outputErrorReplacesOneStep).
 bool outputErrorAdoptable(const Model& model, const Trajectory& window, const ParameterSpace& space,
                           const std::vector<double>& one_step_genes, const OutputErrorResult& oe) {
   constexpr double kDivergedFactor = 10.0;  // as the offline identification's output-error step
@@ -137,7 +137,9 @@ bool outputErrorAdoptable(const Model& model, const Trajectory& window, const Pa
   Model one_step = model, fitted = model;
   setValues(one_step, space.refs(), space.toPhysical(one_step_genes));
   setValues(fitted, space.refs(), oe.values);
-  return replacesStanding(judgedPredictionRms_m(fitted, window), judgedPredictionRms_m(one_step, window));
+  return outputErrorReplacesOneStep(judgedPredictionRms_m(fitted, window),
+                                    judgedPredictionRms_m(one_step, window), oe.noise_std_m,
+                                    oe.noise_std_prior_m);
 }
 
 }  // namespace
@@ -443,6 +445,18 @@ bool OnlineEstimator::update() {
        es_->generation() - last_refine_generation_ >= es_options.refine_period))
     startRefinement(cost, model, window_data);
 
+  Estimate e = makeEstimate(model, window_data);
+  // A reset() or replaceModel() during this update makes its result stale: drop it.
+  std::lock_guard<std::mutex> model_lock(model_mutex_);
+  if (model_version_ != version) return false;
+  std::lock_guard<std::mutex> estimate_lock(estimate_mutex_);
+  estimate_ = std::move(e);
+  return true;
+}
+
+/// The estimate the update just made: the population's best on `window_data`, or the last
+/// output-error fit's values when that estimator publishes, judged for stability on the window.
+Estimate OnlineEstimator::makeEstimate(const Model& model, const Trajectory& window_data) const {
   Estimate e;
   e.valid = true;
   e.generation = static_cast<uint32_t>(es_->generation());
@@ -475,12 +489,7 @@ bool OnlineEstimator::update() {
   setValues(best, es_->space().refs(), e.values);
   e.stable = staysBounded(best, window_data,
                           static_cast<int>(options_.stability_rollout_factor * window_data.numFrames()));
-  // A reset() or replaceModel() during this update makes its result stale: drop it.
-  std::lock_guard<std::mutex> model_lock(model_mutex_);
-  if (model_version_ != version) return false;
-  std::lock_guard<std::mutex> estimate_lock(estimate_mutex_);
-  estimate_ = std::move(e);
-  return true;
+  return e;
 }
 
 bool OnlineEstimator::holdModelValues(Model model, const Trajectory& window, uint64_t frames_added,

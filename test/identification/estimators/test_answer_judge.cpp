@@ -70,4 +70,17 @@ TEST(AnswerJudge, AdoptionRule) {
   EXPECT_TRUE(mme::replacesStanding(nan, nan));  // nothing says it is worse
 }
 
+// An output-error answer judged worse still replaces the one-step answer when its residuals are
+// at the markers' noise, unless its prediction blew up; above the noise the judge decides.
+TEST(AnswerJudge, AnOutputErrorAtTheNoiseReplacesTheOneStepAnswer) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const double noise_m = 1e-3;
+  EXPECT_TRUE(mme::outputErrorReplacesOneStep(14e-3, 13e-3, 1.0 * noise_m, noise_m));
+  EXPECT_TRUE(mme::outputErrorReplacesOneStep(14e-3, 13e-3, mme::kAtNoiseFactor * noise_m, noise_m));
+  EXPECT_FALSE(mme::outputErrorReplacesOneStep(14e-3, 13e-3, 2.0 * mme::kAtNoiseFactor * noise_m, noise_m));
+  EXPECT_FALSE(mme::outputErrorReplacesOneStep(inf, 13e-3, noise_m, noise_m));
+  EXPECT_FALSE(mme::outputErrorReplacesOneStep(14e-3, 13e-3, noise_m, 0.0));  // noise unknown
+  EXPECT_TRUE(mme::outputErrorReplacesOneStep(12e-3, 13e-3, 100.0 * noise_m, noise_m));  // judged better
+}
+
 }  // namespace

@@ -38,6 +38,21 @@ double judgedPredictionRms_m(const Model& model, const Trajectory& trajectory,
 /// candidate does (nothing says it is worse), when only the candidate cannot it does not.
 bool replacesStanding(double candidate_rms_m, double standing_rms_m);
 
+/// An output-error residual at most this many times the markers' noise is "at the noise".
+constexpr double kAtNoiseFactor = 1.5;
+
+/// Whether an output-error answer (judged `output_error_rms_m`, its residuals
+/// `residual_std_m` RMS per coordinate) replaces the one-step answer (judged `one_step_rms_m`)
+/// on data whose marker noise is `noise_std_m`: when the judge says it predicts no worse
+/// (replacesStanding), and also when its residuals are at the noise (kAtNoiseFactor) and its
+/// prediction stays finite. There the output error explains the data as far as the noise lets
+/// anything (it is the estimator made for noisy data, the one-step answer is biased by noise),
+/// while the judge's predictions start from noisy positions and velocities and so measure the
+/// noise as much as the model: at a millimetre on a 100 Hz object a biased one-step answer can
+/// damp the noise and be judged better.
+bool outputErrorReplacesOneStep(double output_error_rms_m, double one_step_rms_m,
+                                double residual_std_m, double noise_std_m);
+
 /// "3.21 mm" style figure for messages ("blew up" for infinity, "not judged" for NaN).
 std::string formatJudged(double rms_m);
 

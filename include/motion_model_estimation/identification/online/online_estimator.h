@@ -169,6 +169,8 @@ class OnlineEstimator {
 
  private:
   Trajectory snapshotLocked() const;
+  /// The estimate of the update under way (update_mutex_ held).
+  Estimate makeEstimate(const Model& model, const Trajectory& window_data) const;
 
   mutable std::mutex frames_mutex_;
   std::deque<double> times_s_;
