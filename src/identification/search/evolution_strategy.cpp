@@ -68,10 +68,7 @@ void EvolutionStrategy::setCost(std::shared_ptr<const Cost> cost) {
   cost_ = std::move(cost);
   if (!population_.empty()) {
     evaluate(&population_);
-    best_index_ = static_cast<int>(
-        std::min_element(population_.begin(), population_.end(),
-                         [](const Individual& a, const Individual& b) { return a.cost < b.cost; }) -
-        population_.begin());
+    best_index_ = lowestCostIndex();
   }
 }
 
@@ -395,13 +392,8 @@ void EvolutionStrategy::refineBest() {
   evaluate(&one);
   if (one[0].cost < start.cost) {
     ++operator_successes_[static_cast<int>(Operator::kRefine)];
-    // Replace the worst individual so the population keeps the old best too.
-    auto worst = std::max_element(population_.begin(), population_.end(),
-                                  [](const Individual& a, const Individual& b) {
-                                    return a.cost < b.cost;
-                                  });
-    *worst = std::move(one[0]);
-    best_index_ = static_cast<int>(worst - population_.begin());
+    // In the worst individual's place, so the population keeps the old best too.
+    replaceWorstIfBetter(std::move(one[0]));
   }
 }
 
@@ -412,14 +404,27 @@ bool EvolutionStrategy::offer(const std::vector<double>& genes) {
   std::vector<Individual> one{candidate};
   evaluate(&one);
   ++operator_counts_[static_cast<int>(Operator::kRefine)];
+  const bool new_best = one[0].cost < best().cost;
+  if (!replaceWorstIfBetter(std::move(one[0]))) return false;
+  ++operator_successes_[static_cast<int>(Operator::kRefine)];
+  return new_best;
+}
+
+int EvolutionStrategy::lowestCostIndex() const {
+  return static_cast<int>(std::min_element(population_.begin(), population_.end(),
+                                           [](const Individual& a, const Individual& b) {
+                                             return a.cost < b.cost;
+                                           }) - population_.begin());
+}
+
+bool EvolutionStrategy::replaceWorstIfBetter(Individual candidate) {
   auto worst = std::max_element(population_.begin(), population_.end(),
                                 [](const Individual& a, const Individual& b) { return a.cost < b.cost; });
-  if (!(one[0].cost < worst->cost)) return false;
-  ++operator_successes_[static_cast<int>(Operator::kRefine)];
-  const bool new_best = one[0].cost < best().cost;
-  *worst = std::move(one[0]);
+  if (!(candidate.cost < worst->cost)) return false;
+  const bool new_best = candidate.cost < best().cost;
+  *worst = std::move(candidate);
   if (new_best) best_index_ = static_cast<int>(worst - population_.begin());
-  return new_best;
+  return true;
 }
 
 std::vector<Individual> EvolutionStrategy::emigrants(int count) const {
@@ -456,20 +461,10 @@ int EvolutionStrategy::immigrate(std::vector<Individual> arrivals) {
   evaluate(&arrivals);
   operator_counts_[static_cast<int>(Operator::kImmigrant)] += arrivals.size();
   int entered = 0;
-  for (Individual& arrival : arrivals) {
-    auto worst = std::max_element(population_.begin(), population_.end(),
-                                  [](const Individual& a, const Individual& b) {
-                                    return a.cost < b.cost;
-                                  });
-    if (!(arrival.cost < worst->cost)) continue;
-    *worst = std::move(arrival);
-    ++entered;
-  }
+  for (Individual& arrival : arrivals)
+    if (replaceWorstIfBetter(std::move(arrival))) ++entered;
   operator_successes_[static_cast<int>(Operator::kImmigrant)] += entered;
-  best_index_ = static_cast<int>(std::min_element(population_.begin(), population_.end(),
-                                                  [](const Individual& a, const Individual& b) {
-                                                    return a.cost < b.cost;
-                                                  }) - population_.begin());
+  best_index_ = lowestCostIndex();  // the first of equally good ones, whatever the arrival order
   return entered;
 }
 

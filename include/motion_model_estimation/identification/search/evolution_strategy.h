@@ -160,6 +160,11 @@ class EvolutionStrategy {
   void forEach(size_t count, const std::function<void(size_t)>& body);
   void select(std::vector<Individual>* children, const std::vector<Operator>& ops);
   void refineBest();
+  /// Index of the first individual of lowest cost.
+  int lowestCostIndex() const;
+  /// Puts `candidate` (evaluated) in the place of the worst individual when it costs less than
+  /// it, the best index following; returns whether it entered.
+  bool replaceWorstIfBetter(Individual candidate);
   uint64_t refineWindow() const;           ///< evaluations per progress window
   uint64_t refineEvaluationLimit() const;  ///< a refinement's evaluations, caps applied
   void initialise();
