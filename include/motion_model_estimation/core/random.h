@@ -8,17 +8,23 @@
 
 namespace mme {
 
+/// splitmix64's step (the golden-ratio increment) and its output mix: unrelated words from
+/// neighbouring inputs, for seeding.
+constexpr uint64_t kSplitMix64Step = 0x9e3779b97f4a7c15ULL;
+inline uint64_t splitMix64Mix(uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
 /// xoshiro256** (Blackman and Vigna), its state filled by splitmix64 from one seed: cheap to
 /// seed, so each child of a generation can have its own stream.
 class Xoshiro256 {
  public:
   explicit Xoshiro256(uint64_t seed) {
     for (uint64_t& word : s_) {
-      seed += 0x9e3779b97f4a7c15ULL;
-      uint64_t z = seed;
-      z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-      z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-      word = z ^ (z >> 31);
+      seed += kSplitMix64Step;
+      word = splitMix64Mix(seed);
     }
   }
   uint64_t operator()() {

@@ -4,6 +4,8 @@
 #include <functional>
 #include <stdexcept>
 
+#include "motion_model_estimation/core/random.h"
+
 namespace mme {
 
 bool parseMigrationTopology(const std::string& name, MigrationTopology* topology) {
@@ -32,10 +34,7 @@ std::string validateOptions(const IslandOptions& o) {
 uint64_t islandSeed(uint64_t run_seed, int island) {
   if (island == 0) return run_seed;
   // splitmix64 of (seed, index): neighbouring run seeds and indices give unrelated streams.
-  uint64_t z = run_seed + 0x9e3779b97f4a7c15ULL * static_cast<uint64_t>(island + 1);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
+  return splitMix64Mix(run_seed + kSplitMix64Step * static_cast<uint64_t>(island + 1));
 }
 
 IslandModel::IslandModel(const ParameterSpace& space, const EsOptions& es, const IslandOptions& islands)
