@@ -21,6 +21,7 @@
 #include "motion_model_estimation/live/estimator_stats.h"
 #include "motion_model_estimation/live/muscle_refit.h"
 #include "motion_model_estimation/live/replay_pacing.h"
+#include "motion_model_estimation/live/thread_times.h"
 #include "motion_model_estimation/pipeline/result_metadata.h"
 #include "motion_model_estimation/ros/bag_io.h"
 #include "motion_model_estimation/ros/conversions.h"
@@ -109,6 +110,7 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
     else
       muscles_ = std::make_unique<MuscleJob>(mo);
   }
+  estimator_options.on_background_thread_start = [this] { startBackgroundThread("mme_refine"); };
   estimator_ = std::make_unique<OnlineEstimator>(model, estimator_options);
   if (!estimator_options.estimate_values)
     ROS_INFO("estimator_node: ~estimate_values is false: the model of %s is shown as it is, its "
@@ -174,6 +176,15 @@ EstimatorNode::~EstimatorNode() {
   if (bag_thread_.joinable()) bag_thread_.join();
   if (structure_thread_.joinable()) structure_thread_.join();
   if (muscle_thread_.joinable()) muscle_thread_.join();
+}
+
+void EstimatorNode::startBackgroundThread(const char* name) const {
+  nameCallingThread(name);
+  if (options_.background_nice <= 0) return;
+  const std::string error = lowerCallingThreadPriority(options_.background_nice);
+  if (!error.empty())
+    ROS_WARN_ONCE("estimator_node: ~background_nice: the background threads keep the worker's "
+                  "priority (%s)", error.c_str());
 }
 
 void EstimatorNode::reject(const std::string& why) {
@@ -308,15 +319,39 @@ void EstimatorNode::onStatsTimer(const ros::WallTimerEvent&) {
 }
 
 void EstimatorNode::workerLoop() {
+  nameCallingThread("mme_worker");
+  // Where the time between two updates goes, on the worker's own clock: reported in ~stats for
+  // the longest gap, and in a warning for every gap over kSlowGapS.
+  constexpr double kSlowGapS = 0.5;
+  ThreadTimes gap_start_times = callingThreadTimes();
+  double gap_start_s = steadyNowS(), in_update_s = 0.0;
   while (!stop_ && ros::ok()) {
     bool updated = false;
+    const double update_start_s = steadyNowS();
     try {
       updated = estimator_->update();
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(5.0, "estimator_node: update failed: %s", e.what());
     }
+    const double now_s = steadyNowS();
+    in_update_s += now_s - update_start_s;
     if (updated) {
-      update_stats_.onUpdate(steadyNowS());
+      const ThreadTimes times = callingThreadTimes();
+      UpdateGapBreakdown where;
+      where.in_update_s = in_update_s;
+      where.on_cpu_s = times.on_cpu_s - gap_start_times.on_cpu_s;
+      where.waiting_s = times.waiting_s - gap_start_times.waiting_s;
+      where.known = times.waiting_known;
+      update_stats_.onUpdate(now_s, where);
+      const double gap_s = now_s - gap_start_s;
+      if (gap_s > kSlowGapS && update_stats_.updates() > 1)
+        ROS_WARN("estimator_node: %.3f s between estimate updates: %.3f s in update() (the last "
+                 "one %.3f s), the worker %.3f s on a core and %.3f s waiting for one%s",
+                 gap_s, in_update_s, now_s - update_start_s, where.on_cpu_s, where.waiting_s,
+                 where.known ? "" : " (not measured)");
+      gap_start_times = times;
+      gap_start_s = now_s;
+      in_update_s = 0.0;
       if (islands_) islands_->afterUpdate();
     } else {
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
@@ -325,6 +360,7 @@ void EstimatorNode::workerLoop() {
 }
 
 void EstimatorNode::structureLoop() {
+  startBackgroundThread("mme_structure");
   while (!stop_ && ros::ok()) {
     const Trajectory window = structure_->pending() ? estimator_->window() : Trajectory();
     if (window.numFrames() < structure_->minFrames()) {
@@ -363,6 +399,7 @@ constexpr uint32_t kMuscleMinGenerations = 20;
 }  // namespace
 
 void EstimatorNode::muscleLoop() {
+  startBackgroundThread("mme_muscles");
   while (!stop_ && ros::ok()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     if (structure_ && structure_->state() != StructureJob::State::kChosen) continue;
@@ -400,6 +437,7 @@ Model EstimatorNode::shownModel(Trajectory* window) const {
 }
 
 void EstimatorNode::bagLoop() {
+  nameCallingThread("mme_bag");
   Trajectory bag;
   try {
     // A capture file is replayed as its bag would be (convert's): same frames, times and gaps.
@@ -457,6 +495,7 @@ void EstimatorNode::onPublishTimer(const ros::WallTimerEvent&) {
 }
 
 void EstimatorNode::markersLoop() {
+  startBackgroundThread("mme_markers");
   while (!stop_ && ros::ok()) {
     uint64_t seq = 0;
     bool new_frame = false;

@@ -63,6 +63,8 @@ class EstimatorNode {
                       std::chrono::steady_clock::time_point arrival);
   void reject(const std::string& why);
   void workerLoop();
+  /// Names the calling thread and gives it ~background_nice (threads beside the worker).
+  void startBackgroundThread(const char* name) const;
   /// ~select_structure: chooses the structure when requested and the window is full, then
   /// hands the model to the estimator and writes the report.
   void structureLoop();

@@ -192,7 +192,9 @@ void OnlineEstimator::startRefinement(std::shared_ptr<const Cost> cost, const Mo
   // The thread owns copies of what it reads (the space, the start, the window) and shares the
   // window's cost.
   job->thread = std::thread([out, cost, space = es_->space(), start, settings, algorithm,
-                             output_error, warm, oe_options, model, window, deadline]() mutable {
+                             output_error, warm, oe_options, model, window, deadline,
+                             on_start = options_.on_background_thread_start]() mutable {
+    if (on_start) on_start();
     const std::unique_ptr<Refiner> refiner = Refiner::Create(algorithm);
     try {
       out->result = refineAlternating(*refiner, *cost, space, start, settings, nullptr);

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -38,6 +39,9 @@ struct OnlineEstimatorOptions {
   /// [s] a refinement running beside the generations stops after this long (its best so far is
   /// handed over as usual).
   double refine_max_s = 10.0;
+  /// Called first on each thread the estimator starts beside the worker (the refinements), e.g.
+  /// to name it or lower its priority so that the worker gets the cores first (may be empty).
+  std::function<void()> on_background_thread_start;
   /// Which cost gives the published estimate (identifier.h): kAuto picks the output-error
   /// estimator when the first window's estimated marker noise reaches auto_noise_threshold_m.
   /// It runs beside the generations after each refinement, warm-started from its last answer.
