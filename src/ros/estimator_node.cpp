@@ -368,7 +368,16 @@ void EstimatorNode::structureLoop() {
       continue;
     }
     ROS_INFO("estimator_node: choosing the structure on a window of %d frames", window.numFrames());
-    const std::optional<StructureResult> r = structure_->runIfDue(window);
+    // The first level is put to use at once (the estimator and the muscles start on it) while
+    // the later levels are judged; the final choice replaces it only when it is another structure.
+    bool first_in_use = false;
+    const auto first_level = [this, &first_in_use](const Model& model, const std::string& level) {
+      first_in_use = useStructure(model);
+      if (first_in_use)
+        ROS_INFO("estimator_node: structure '%s' in use while the selection judges the later levels",
+                 level.c_str());
+    };
+    const std::optional<StructureResult> r = structure_->runIfDue(window, first_level);
     if (!r) {
       if (structure_->state() == StructureJob::State::kFailed)
         ROS_ERROR("estimator_node: structure selection failed: %s (the next ~reset tries again)",
@@ -381,16 +390,26 @@ void EstimatorNode::structureLoop() {
     } catch (const std::exception& e) {
       ROS_ERROR("estimator_node: the structure report could not be written: %s", e.what());
     }
-    try {
-      std::lock_guard<std::mutex> lock(input_mutex_);
-      estimator_->replaceModel(r->model);  // same particles: the window stays
-      if (muscles_) muscles_->forget();  // fitted on the old structure
-    } catch (const std::exception& e) {
-      ROS_ERROR("estimator_node: the chosen structure was refused: %s", e.what());
+    if (first_in_use && StructureJob::choseFirstLevel(*r)) {
+      ROS_INFO("estimator_node: the chosen structure is the one in use since its first level");
       continue;
     }
-    last_published_generation_ = 0;
+    useStructure(r->model);
   }
+}
+
+bool EstimatorNode::useStructure(const Model& model) {
+  try {
+    std::lock_guard<std::mutex> lock(input_mutex_);
+    estimator_->replaceModel(model);  // same particles: the window stays
+    if (muscles_) muscles_->forget();  // fitted on the old structure
+  } catch (const std::exception& e) {
+    ROS_ERROR("estimator_node: the chosen structure was refused: %s", e.what());
+    return false;
+  }
+  last_published_generation_ = 0;
+  structure_in_use_ = true;
+  return true;
 }
 
 namespace {
@@ -402,7 +421,7 @@ void EstimatorNode::muscleLoop() {
   startBackgroundThread("mme_muscles");
   while (!stop_ && ros::ok()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    if (structure_ && structure_->state() != StructureJob::State::kChosen) continue;
+    if (structure_ && !structure_in_use_) continue;
     const Estimate e = estimator_->estimate();
     if (!e.valid) continue;
     const Model passive = estimator_->currentModel();
@@ -549,6 +568,7 @@ bool EstimatorNode::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Resp
                     ? "population cleared; identification restarts on the current window"
                     : "nothing to identify (~estimate_values is false): the model is shown as it is";
   if (structure_) {
+    structure_in_use_ = false;  // the muscles wait for the new selection's first level
     structure_->request();
     res.message += "; the structure is chosen again on the next full window";
   }

@@ -70,7 +70,7 @@ struct EstimatorNodeOptions {
   /// Niceness (0..19) of the node's background threads (refinements, structure selection, sensor
   /// muscles, ~markers drawing), so that on busy cores the worker gets them first (0: as the
   /// worker's).
-  int background_nice = 0;
+  int background_nice = 10;
   IslandLinkOptions islands;
   OnlineEstimatorOptions estimator;
 };
