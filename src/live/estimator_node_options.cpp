@@ -137,6 +137,8 @@ void readWindow(const ParameterSource& params, EstimatorNodeOptions* options) {
           "~update_budget_sec must be > 0");
   params.get("refine_max_sec", &e.refine_max_s);
   require(e.refine_max_s > 0.0 && std::isfinite(e.refine_max_s), "~refine_max_sec must be > 0");
+  params.get("background_nice", &o.background_nice);
+  require(o.background_nice >= 0 && o.background_nice <= 19, "~background_nice must be in [0, 19]");
   params.get("segment_frames", &e.output_error.segment_frames);
   require(e.output_error.segment_frames >= 2, "~segment_frames must be >= 2");
   params.get("grow_segments", &e.output_error.grow_segments);

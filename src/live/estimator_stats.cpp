@@ -50,9 +50,16 @@ std::string formatStats(const EstimatorStats& s) {
     text += field;
   }
   if (s.updates.updates > 0) {
-    std::snprintf(field, sizeof(field), " max_update_gap_ms=%.3f max_update_gap_10s_ms=%.3f",
-                  s.updates.max_gap_ms, s.updates.recent_max_gap_ms);
+    std::snprintf(field, sizeof(field), " max_update_gap_ms=%.3f max_update_gap_10s_ms=%.3f update_gap_p99_ms=%.3f",
+                  s.updates.max_gap_ms, s.updates.recent_max_gap_ms, s.updates.p99_gap_ms);
     text += field;
+    const UpdateGapBreakdown& b = s.updates.max_gap_breakdown;
+    if (b.known) {
+      std::snprintf(field, sizeof(field),
+                    " max_update_gap_in_update_ms=%.3f max_update_gap_cpu_ms=%.3f max_update_gap_waiting_ms=%.3f",
+                    1e3 * b.in_update_s, 1e3 * b.on_cpu_s, 1e3 * b.waiting_s);
+      text += field;
+    }
     text += " output_error_rejections=" + std::to_string(s.output_error_rejections);
   }
   if (s.prediction) {

@@ -26,7 +26,7 @@ bool StructureJob::pending() const {
   return requested_;
 }
 
-std::optional<StructureResult> StructureJob::runIfDue(const Trajectory& window) {
+std::optional<StructureResult> StructureJob::runIfDue(const Trajectory& window, const FirstLevel& first_level) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!requested_ || window.numFrames() < min_frames_) return std::nullopt;
@@ -34,7 +34,18 @@ std::optional<StructureResult> StructureJob::runIfDue(const Trajectory& window) 
     state_ = State::kRunning;
   }
   try {
-    StructureResult result = chooseStructure(base_, window, options_);
+    // The pipeline's structure step (chooseStructure), with the first level passed on.
+    StructureOptions so;
+    so.identify = options_.identify;
+    so.max_wall_time_s = options_.identify.max_wall_time_s;
+    so.progress = options_.say;
+    if (first_level)
+      so.on_first_level = [this, &first_level](const StructureCandidate& c) {
+        Model model = c.model;
+        model.frame_rate_hz = base_.frame_rate_hz;
+        first_level(model, c.name);
+      };
+    StructureResult result = selectStructure(base_, window, so);
     std::string level;
     for (const StructureCandidate& c : result.candidates)
       if (c.chosen) level = c.name;
@@ -51,6 +62,14 @@ std::optional<StructureResult> StructureJob::runIfDue(const Trajectory& window) 
     error_ = e.what();
     return std::nullopt;
   }
+}
+
+bool StructureJob::choseFirstLevel(const StructureResult& result) {
+  if (result.candidates.empty()) return false;
+  const StructureCandidate& first = result.candidates.front();
+  for (const StructureCandidate& c : result.candidates)
+    if (c.chosen) return &c == &first || c.same_as == first.name;
+  return false;
 }
 
 StructureJob::State StructureJob::state() const {

@@ -21,6 +21,7 @@
 #include "motion_model_estimation/live/estimator_stats.h"
 #include "motion_model_estimation/live/muscle_refit.h"
 #include "motion_model_estimation/live/replay_pacing.h"
+#include "motion_model_estimation/live/thread_times.h"
 #include "motion_model_estimation/pipeline/result_metadata.h"
 #include "motion_model_estimation/ros/bag_io.h"
 #include "motion_model_estimation/ros/conversions.h"
@@ -109,6 +110,7 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
     else
       muscles_ = std::make_unique<MuscleJob>(mo);
   }
+  estimator_options.on_background_thread_start = [this] { startBackgroundThread("mme_refine"); };
   estimator_ = std::make_unique<OnlineEstimator>(model, estimator_options);
   if (!estimator_options.estimate_values)
     ROS_INFO("estimator_node: ~estimate_values is false: the model of %s is shown as it is, its "
@@ -174,6 +176,15 @@ EstimatorNode::~EstimatorNode() {
   if (bag_thread_.joinable()) bag_thread_.join();
   if (structure_thread_.joinable()) structure_thread_.join();
   if (muscle_thread_.joinable()) muscle_thread_.join();
+}
+
+void EstimatorNode::startBackgroundThread(const char* name) const {
+  nameCallingThread(name);
+  if (options_.background_nice <= 0) return;
+  const std::string error = lowerCallingThreadPriority(options_.background_nice);
+  if (!error.empty())
+    ROS_WARN_ONCE("estimator_node: ~background_nice: the background threads keep the worker's "
+                  "priority (%s)", error.c_str());
 }
 
 void EstimatorNode::reject(const std::string& why) {
@@ -308,15 +319,39 @@ void EstimatorNode::onStatsTimer(const ros::WallTimerEvent&) {
 }
 
 void EstimatorNode::workerLoop() {
+  nameCallingThread("mme_worker");
+  // Where the time between two updates goes, on the worker's own clock: reported in ~stats for
+  // the longest gap, and in a warning for every gap over kSlowGapS.
+  constexpr double kSlowGapS = 0.5;
+  ThreadTimes gap_start_times = callingThreadTimes();
+  double gap_start_s = steadyNowS(), in_update_s = 0.0;
   while (!stop_ && ros::ok()) {
     bool updated = false;
+    const double update_start_s = steadyNowS();
     try {
       updated = estimator_->update();
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(5.0, "estimator_node: update failed: %s", e.what());
     }
+    const double now_s = steadyNowS();
+    in_update_s += now_s - update_start_s;
     if (updated) {
-      update_stats_.onUpdate(steadyNowS());
+      const ThreadTimes times = callingThreadTimes();
+      UpdateGapBreakdown where;
+      where.in_update_s = in_update_s;
+      where.on_cpu_s = times.on_cpu_s - gap_start_times.on_cpu_s;
+      where.waiting_s = times.waiting_s - gap_start_times.waiting_s;
+      where.known = times.waiting_known;
+      update_stats_.onUpdate(now_s, where);
+      const double gap_s = now_s - gap_start_s;
+      if (gap_s > kSlowGapS && update_stats_.updates() > 1)
+        ROS_WARN("estimator_node: %.3f s between estimate updates: %.3f s in update() (the last "
+                 "one %.3f s), the worker %.3f s on a core and %.3f s waiting for one%s",
+                 gap_s, in_update_s, now_s - update_start_s, where.on_cpu_s, where.waiting_s,
+                 where.known ? "" : " (not measured)");
+      gap_start_times = times;
+      gap_start_s = now_s;
+      in_update_s = 0.0;
       if (islands_) islands_->afterUpdate();
     } else {
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
@@ -325,6 +360,7 @@ void EstimatorNode::workerLoop() {
 }
 
 void EstimatorNode::structureLoop() {
+  startBackgroundThread("mme_structure");
   while (!stop_ && ros::ok()) {
     const Trajectory window = structure_->pending() ? estimator_->window() : Trajectory();
     if (window.numFrames() < structure_->minFrames()) {
@@ -332,7 +368,16 @@ void EstimatorNode::structureLoop() {
       continue;
     }
     ROS_INFO("estimator_node: choosing the structure on a window of %d frames", window.numFrames());
-    const std::optional<StructureResult> r = structure_->runIfDue(window);
+    // The first level is put to use at once (the estimator and the muscles start on it) while
+    // the later levels are judged; the final choice replaces it only when it is another structure.
+    bool first_in_use = false;
+    const auto first_level = [this, &first_in_use](const Model& model, const std::string& level) {
+      first_in_use = useStructure(model);
+      if (first_in_use)
+        ROS_INFO("estimator_node: structure '%s' in use while the selection judges the later levels",
+                 level.c_str());
+    };
+    const std::optional<StructureResult> r = structure_->runIfDue(window, first_level);
     if (!r) {
       if (structure_->state() == StructureJob::State::kFailed)
         ROS_ERROR("estimator_node: structure selection failed: %s (the next ~reset tries again)",
@@ -345,16 +390,26 @@ void EstimatorNode::structureLoop() {
     } catch (const std::exception& e) {
       ROS_ERROR("estimator_node: the structure report could not be written: %s", e.what());
     }
-    try {
-      std::lock_guard<std::mutex> lock(input_mutex_);
-      estimator_->replaceModel(r->model);  // same particles: the window stays
-      if (muscles_) muscles_->forget();  // fitted on the old structure
-    } catch (const std::exception& e) {
-      ROS_ERROR("estimator_node: the chosen structure was refused: %s", e.what());
+    if (first_in_use && StructureJob::choseFirstLevel(*r)) {
+      ROS_INFO("estimator_node: the chosen structure is the one in use since its first level");
       continue;
     }
-    last_published_generation_ = 0;
+    useStructure(r->model);
   }
+}
+
+bool EstimatorNode::useStructure(const Model& model) {
+  try {
+    std::lock_guard<std::mutex> lock(input_mutex_);
+    estimator_->replaceModel(model);  // same particles: the window stays
+    if (muscles_) muscles_->forget();  // fitted on the old structure
+  } catch (const std::exception& e) {
+    ROS_ERROR("estimator_node: the chosen structure was refused: %s", e.what());
+    return false;
+  }
+  last_published_generation_ = 0;
+  structure_in_use_ = true;
+  return true;
 }
 
 namespace {
@@ -363,9 +418,10 @@ constexpr uint32_t kMuscleMinGenerations = 20;
 }  // namespace
 
 void EstimatorNode::muscleLoop() {
+  startBackgroundThread("mme_muscles");
   while (!stop_ && ros::ok()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    if (structure_ && structure_->state() != StructureJob::State::kChosen) continue;
+    if (structure_ && !structure_in_use_) continue;
     const Estimate e = estimator_->estimate();
     if (!e.valid) continue;
     const Model passive = estimator_->currentModel();
@@ -400,6 +456,7 @@ Model EstimatorNode::shownModel(Trajectory* window) const {
 }
 
 void EstimatorNode::bagLoop() {
+  nameCallingThread("mme_bag");
   Trajectory bag;
   try {
     // A capture file is replayed as its bag would be (convert's): same frames, times and gaps.
@@ -457,6 +514,7 @@ void EstimatorNode::onPublishTimer(const ros::WallTimerEvent&) {
 }
 
 void EstimatorNode::markersLoop() {
+  startBackgroundThread("mme_markers");
   while (!stop_ && ros::ok()) {
     uint64_t seq = 0;
     bool new_frame = false;
@@ -510,6 +568,7 @@ bool EstimatorNode::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Resp
                     ? "population cleared; identification restarts on the current window"
                     : "nothing to identify (~estimate_values is false): the model is shown as it is";
   if (structure_) {
+    structure_in_use_ = false;  // the muscles wait for the new selection's first level
     structure_->request();
     res.message += "; the structure is chosen again on the next full window";
   }

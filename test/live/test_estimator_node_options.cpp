@@ -65,6 +65,7 @@ TEST(EstimatorNodeOptions, DefaultsAreTheDocumentedOnes) {
   EXPECT_EQ(o.input_type, mme::InputType::kMarkers);
   EXPECT_EQ(o.update_rate_hz, 20.0);
   EXPECT_EQ(o.structure_max_time_s, 120.0);
+  EXPECT_EQ(o.background_nice, 10);
   EXPECT_FALSE(o.select_structure);
   EXPECT_EQ(o.model_dir, "/tmp/models");
   EXPECT_EQ(o.estimator.es.offspring, o.estimator.es.population);
@@ -95,6 +96,8 @@ TEST(EstimatorNodeOptions, EveryCheckNamesItsParameter) {
       {"preset", std::string("fast"), "~preset must be default or paper, got 'fast'"},
       {"cost", std::string("l1"), "~cost must be auto, short_term or output_error, got 'l1'"},
       {"refine_period", -1, "~refine_start_generation and ~refine_period must be >= 0"},
+      {"background_nice", -1, "~background_nice must be in [0, 19]"},
+      {"background_nice", 20, "~background_nice must be in [0, 19]"},
   };
   for (const Case& c : cases) {
     MapSource s = withModel();

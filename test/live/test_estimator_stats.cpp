@@ -40,7 +40,7 @@ TEST(EstimatorStats, LatencyAndUpdateGapFieldsOnceTheyExist) {
   EXPECT_EQ(mme::formatStats(s),
             "accepted=1 rejected=0 occluded=0 rejected_time=0 rejected_size=0 clock_jumps=0 "
             "updates=42 markers_published=0 max_update_gap_ms=512.250 "
-            "max_update_gap_10s_ms=61.000 output_error_rejections=0");
+            "max_update_gap_10s_ms=61.000 update_gap_p99_ms=0.000 output_error_rejections=0");
   s.latency.count = 9;
   s.latency.kept = 9;
   s.latency.p50_ms = 0.2114;
@@ -48,7 +48,16 @@ TEST(EstimatorStats, LatencyAndUpdateGapFieldsOnceTheyExist) {
   EXPECT_EQ(mme::formatStats(s),
             "accepted=1 rejected=0 occluded=0 rejected_time=0 rejected_size=0 clock_jumps=0 "
             "updates=42 markers_published=9 latency_p50_ms=0.211 latency_p99_ms=1.500 "
-            "max_update_gap_ms=512.250 max_update_gap_10s_ms=61.000 output_error_rejections=0");
+            "max_update_gap_ms=512.250 max_update_gap_10s_ms=61.000 update_gap_p99_ms=0.000 "
+            "output_error_rejections=0");
+  s.updates.p99_gap_ms = 97.0;
+  s.updates.max_gap_breakdown = {0.5, 0.125, 0.25, true};
+  EXPECT_EQ(mme::formatStats(s),
+            "accepted=1 rejected=0 occluded=0 rejected_time=0 rejected_size=0 clock_jumps=0 "
+            "updates=42 markers_published=9 latency_p50_ms=0.211 latency_p99_ms=1.500 "
+            "max_update_gap_ms=512.250 max_update_gap_10s_ms=61.000 update_gap_p99_ms=97.000 "
+            "max_update_gap_in_update_ms=500.000 max_update_gap_cpu_ms=125.000 "
+            "max_update_gap_waiting_ms=250.000 output_error_rejections=0");
 }
 
 TEST(EstimatorStats, PredictionFieldsPerHorizonAndPredictorInMillimetres) {

@@ -1,6 +1,7 @@
 // The live node's structure selection: it waits for a window long enough, chooses the structure
 // of a random object from its particles alone, runs once per request (the first at start, then
-// ~reset), and a window it cannot use leaves it failed with the reason and no model.
+// ~reset), hands over its first level as soon as it is judged, and a window it cannot use leaves
+// it failed with the reason and no model.
 #include <gtest/gtest.h>
 
 #include "motion_model_estimation/core/simulator.h"
@@ -84,6 +85,48 @@ TEST(StructureJob, ACutSelectionOnTheCrashWindowChoosesAndIsFlagged) {
   EXPECT_TRUE(job.lastCut());
   EXPECT_TRUE(r->stopped_by_time);
   EXPECT_FALSE(r->model.bonds.empty());
+}
+
+// The first level reaches the caller during the selection, once, with every free value set and
+// the base model's rate setting; the result says whether the choice is that level's structure.
+TEST(StructureJob, HandsOverTheFirstLevelWhileTheSelectionGoesOn) {
+  mme::RandomObjectSpec spec;
+  spec.particles = 10;
+  spec.bond_types = 3;
+  spec.bonds = 16;
+  const mme::Model truth = mme::makeRandomObject(spec);
+  mme::Model particles = mme::test::particlesOnly(truth);
+  particles.frame_rate_hz = 0.0;  // a live model: the stream's rate
+  const mme::Trajectory data = mme::simulateTrajectory(truth, 120, truth.frame_rate_hz);
+  mme::StructureJob job(particles, quickOptions(), 100);
+  int calls = 0;
+  std::string level, status_during;
+  mme::Model first;
+  const std::optional<mme::StructureResult> r =
+      job.runIfDue(data, [&](const mme::Model& model, const std::string& name) {
+        ++calls;
+        first = model;
+        level = name;
+        status_during = job.status();
+      });
+  ASSERT_TRUE(r.has_value()) << job.lastError();
+  EXPECT_EQ(calls, 1);
+  EXPECT_EQ(level, "springs");
+  EXPECT_EQ(status_during, "running");  // the later levels were still to come
+  EXPECT_EQ(first.frame_rate_hz, 0.0);
+  ASSERT_FALSE(mme::freeParameters(first).empty());
+  for (const mme::ParamRef& ref : mme::freeParameters(first)) EXPECT_TRUE(mme::paramOf(first, ref).has_value) << ref.name;
+  EXPECT_GT(r->candidates.size(), 1u);
+  // Noiseless springs: the springs level is chosen, so what was handed over is the answer.
+  EXPECT_EQ(job.status().rfind("chosen:springs", 0), 0u) << job.status();
+  EXPECT_TRUE(mme::StructureJob::choseFirstLevel(*r));
+  mme::StructureResult other = *r;
+  for (mme::StructureCandidate& c : other.candidates) c.chosen = false;
+  other.candidates.back().chosen = true;
+  other.candidates.back().same_as.clear();
+  EXPECT_FALSE(mme::StructureJob::choseFirstLevel(other));
+  other.candidates.back().same_as = other.candidates.front().name;
+  EXPECT_TRUE(mme::StructureJob::choseFirstLevel(other));
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 // UpdateGapStats: the longest gap between updates over the run and over the last 10 s, the
-// open gap included, nothing before the first update.
+// open gap included, nothing before the first update; the gaps' 99th percentile and where the
+// longest one's time went.
 #include <gtest/gtest.h>
 
 #include "motion_model_estimation/live/update_gap_stats.h"
@@ -62,6 +63,40 @@ TEST(UpdateGapStats, AnotherRecentWindow) {
   // The 0.5 s gap ended more than 1 s ago; the open one (0.95 s) is the longest now.
   EXPECT_NEAR(stats.summary(1.55).recent_max_gap_ms, 950.0, 1e-9);
   EXPECT_NEAR(stats.summary(1.55).max_gap_ms, 950.0, 1e-9);
+}
+
+TEST(UpdateGapStats, NinetyNinthPercentileOfTheClosedGaps) {
+  mme::UpdateGapStats stats;
+  EXPECT_EQ(stats.summary(0.0).p99_gap_ms, 0.0);
+  double t = 0.0;
+  stats.onUpdate(t);
+  for (int k = 0; k < 990; ++k) stats.onUpdate(t += 0.0505);  // 990 gaps of 50.5 ms
+  for (int k = 0; k < 10; ++k) stats.onUpdate(t += 0.3005);   // 10 of 300.5 ms: the top 1 %
+  mme::UpdateGapSummary s = stats.summary(t);
+  EXPECT_NEAR(s.p99_gap_ms, 51.0, 1e-9);  // the upper edge of the 1-ms bin of rank 990
+  stats.onUpdate(t += 0.3005);  // one more long gap: 11 of 1001 above, rank 991 among them
+  EXPECT_NEAR(stats.summary(t).p99_gap_ms, 301.0, 1e-9);
+  stats.onUpdate(t += 12.0);  // beyond the bins: counted in the last, reported as the largest
+  for (int k = 0; k < 5; ++k) stats.onUpdate(t += 12.0);
+  EXPECT_NEAR(stats.summary(t).p99_gap_ms, 301.0, 1e-9);
+}
+
+TEST(UpdateGapStats, TheLongestGapKeepsItsBreakdown) {
+  mme::UpdateGapStats stats;
+  stats.onUpdate(0.0);
+  stats.onUpdate(0.1, {0.09, 0.08, 0.005, true});
+  stats.onUpdate(0.9, {0.75, 0.1, 0.6, true});  // the longest: mostly waiting for a core
+  stats.onUpdate(1.0, {0.09, 0.09, 0.0, true});
+  const mme::UpdateGapSummary s = stats.summary(1.0);
+  EXPECT_NEAR(s.max_gap_ms, 800.0, 1e-9);
+  EXPECT_TRUE(s.max_gap_breakdown.known);
+  EXPECT_EQ(s.max_gap_breakdown.in_update_s, 0.75);
+  EXPECT_EQ(s.max_gap_breakdown.on_cpu_s, 0.1);
+  EXPECT_EQ(s.max_gap_breakdown.waiting_s, 0.6);
+  mme::UpdateGapStats unmeasured;
+  unmeasured.onUpdate(0.0);
+  unmeasured.onUpdate(1.0);
+  EXPECT_FALSE(unmeasured.summary(1.0).max_gap_breakdown.known);
 }
 
 }  // namespace

@@ -67,6 +67,10 @@ struct EstimatorNodeOptions {
   /// (~muscles_max_time_sec), the refit period (~muscle_refit_period_sec); min_frames follows
   /// ~window_frames.
   MuscleJobOptions muscles = defaultMuscleJobOptions();
+  /// Niceness (0..19) of the node's background threads (refinements, structure selection, sensor
+  /// muscles, ~markers drawing), so that on busy cores the worker gets them first (0: as the
+  /// worker's).
+  int background_nice = 10;
   IslandLinkOptions islands;
   OnlineEstimatorOptions estimator;
 };

@@ -55,8 +55,10 @@ struct EstimatorStats {
 /// "accepted=N rejected=N occluded=N rejected_time=N rejected_size=N clock_jumps=N updates=N
 /// markers_published=N" (occluded: hidden markers; after it "model_only=N" when the input had no
 /// marker for fixed particles of the model, e.g. anchors: samples masked, not occluded), then "latency_p50_ms=X latency_p99_ms=X" once markers were drawn, then
-/// "max_update_gap_ms=X max_update_gap_10s_ms=X output_error_rejections=N" once an update
-/// happened (X with 3 decimals); with ~islands/enabled "migrants_sent=N migrants_received=N
+/// "max_update_gap_ms=X max_update_gap_10s_ms=X update_gap_p99_ms=X" once an update happened
+/// (X with 3 decimals), then, when the worker measured where the longest gap went,
+/// "max_update_gap_in_update_ms=X max_update_gap_cpu_ms=X max_update_gap_waiting_ms=X" (inside
+/// update(), on a core, runnable but waiting for a core), then "output_error_rejections=N"; with ~islands/enabled "migrants_sent=N migrants_received=N
 /// migrants_accepted=N migrants_refused=N migrants_dropped=N migrant_batches_from_peers=N", then
 /// "migrant_latency_p50_ms=X migrant_latency_p99_ms=X migrant_latency_max_ms=X
 /// migrant_batches_late=N" once a peer's batch arrived and "migration_period_ms=X" once this

@@ -4,6 +4,7 @@
 // of its own and hands the chosen model to the estimator.
 #pragma once
 
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -27,10 +28,19 @@ class StructureJob {
   /// (Re)selects on the next window holding min_frames frames (thread-safe).
   void request();
   bool pending() const;
+  /// Receives the first level's model (every free value set, the base model's frame-rate
+  /// setting) and its name while the selection goes on.
+  using FirstLevel = std::function<void(const Model& model, const std::string& level)>;
+
   /// Runs the selection when one is requested and `window` holds enough frames (blocking; call
   /// from one thread). Returns the result, or nothing when it did not run or failed (status()
-  /// then says why).
-  std::optional<StructureResult> runIfDue(const Trajectory& window);
+  /// then says why). `first_level`, when given, gets the first level as soon as it is judged
+  /// (on this thread, during the call), so that a structure is in use long before the later
+  /// levels are judged.
+  std::optional<StructureResult> runIfDue(const Trajectory& window, const FirstLevel& first_level = {});
+  /// Whether `result` chose the structure of its first level (that level, or a later one that
+  /// kept nothing new): what runIfDue's `first_level` got is then the answer already.
+  static bool choseFirstLevel(const StructureResult& result);
   /// kIdle (nothing requested yet), kPending, kRunning, kChosen, kFailed (thread-safe).
   State state() const;
   /// The state as ~stats names it: "idle", "pending", "running", "chosen:<level>", "failed".

@@ -63,6 +63,11 @@ class EstimatorNode {
                       std::chrono::steady_clock::time_point arrival);
   void reject(const std::string& why);
   void workerLoop();
+  /// Gives `model` (a structure chosen, or the selection's first level) to the estimator and
+  /// drops the muscles fitted on the previous one; false (logged) when the estimator refuses it.
+  bool useStructure(const Model& model);
+  /// Names the calling thread and gives it ~background_nice (threads beside the worker).
+  void startBackgroundThread(const char* name) const;
   /// ~select_structure: chooses the structure when requested and the window is full, then
   /// hands the model to the estimator and writes the report.
   void structureLoop();
@@ -112,6 +117,9 @@ class EstimatorNode {
   bool markers_estimate_changed_ = false;
   std::chrono::steady_clock::time_point newest_arrival_;
   std::atomic<bool> stop_{false};
+  /// A structure chosen by the selection (or its first level) is in the estimator: the muscles
+  /// may be fitted on it.
+  std::atomic<bool> structure_in_use_{false};
   std::atomic<uint64_t> rejected_{0};
   std::atomic<uint32_t> last_published_generation_{0};  // timer and services: two threads
   // Statistics (thread-safe units): arrival -> ~markers latency, gaps between updates, jumps.

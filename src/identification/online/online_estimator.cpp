@@ -161,10 +161,22 @@ struct OnlineEstimator::BackgroundRefinement {
 
 OnlineEstimator::~OnlineEstimator() {
   std::lock_guard<std::mutex> lock(update_mutex_);
-  stopRefinement();
+  retireRefinement();
+  retired_.clear();  // cancelled: each destructor joins its thread
 }
 
-void OnlineEstimator::stopRefinement() { refinement_.reset(); }  // cancels and joins
+void OnlineEstimator::retireRefinement() {
+  if (!refinement_) return;
+  refinement_->cancel = true;
+  retired_.push_back(std::move(refinement_));
+}
+
+void OnlineEstimator::reapRetiredRefinements() {
+  // Only the ended ones: joining a thread that has set `done` waits for its return alone.
+  retired_.erase(std::remove_if(retired_.begin(), retired_.end(),
+                                [](const std::unique_ptr<BackgroundRefinement>& job) { return job->done.load(); }),
+                 retired_.end());
+}
 
 void OnlineEstimator::waitForRefinement() {
   std::lock_guard<std::mutex> lock(update_mutex_);
@@ -192,7 +204,9 @@ void OnlineEstimator::startRefinement(std::shared_ptr<const Cost> cost, const Mo
   // The thread owns copies of what it reads (the space, the start, the window) and shares the
   // window's cost.
   job->thread = std::thread([out, cost, space = es_->space(), start, settings, algorithm,
-                             output_error, warm, oe_options, model, window, deadline]() mutable {
+                             output_error, warm, oe_options, model, window, deadline,
+                             on_start = options_.on_background_thread_start]() mutable {
+    if (on_start) on_start();
     const std::unique_ptr<Refiner> refiner = Refiner::Create(algorithm);
     try {
       out->result = refineAlternating(*refiner, *cost, space, start, settings, nullptr);
@@ -395,8 +409,9 @@ bool OnlineEstimator::update() {
     version = model_version_;
   }
   const auto began = std::chrono::steady_clock::now();
+  reapRetiredRefinements();
   if (version != es_version_) {  // reset() or replaceModel() since the last update
-    stopRefinement();
+    retireRefinement();  // cancelled, never waited for: it ends on its own
     es_.reset();
     last_refine_generation_ = -1;
     output_error_ = OutputErrorResult();

@@ -30,6 +30,7 @@ class LevelSequence {
       if (!runLevel(level_index)) break;
       const std::chrono::duration<double> elapsed = std::chrono::steady_clock::now() - start;
       sayPace(level_index, elapsed.count());
+      if (level_index == 0 && ctx_.options.on_first_level) ctx_.options.on_first_level(candidates_.front());
     }
     return std::move(candidates_);
   }

@@ -1,9 +1,14 @@
 // The online estimator's engine: an update runs the generations its budget allows, the
-// refinement runs beside the generations and is handed over, and the estimate on a window gets
-// as good as the offline identification of the same window.
+// refinement runs beside the generations and is handed over (and is never waited for, not even
+// when the model changes), and the estimate on a window gets as good as the offline
+// identification of the same window.
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <future>
+#include <memory>
 
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/simulator.h"
@@ -81,6 +86,64 @@ TEST(OnlineEstimator, TheRefinementRunsBesideTheGenerationsAndIsHandedOver) {
               e.last_refine_status == mme::RefineStatus::kNoProgress)
       << mme::refineStatusName(e.last_refine_status);
   EXPECT_LT(maxRelativeError(e.values, f.true_values), 1e-6) << e.global_cost;
+}
+
+/// Lets a background job held on purpose go, once.
+struct Release {
+  std::promise<void> promise;
+  std::shared_future<void> future = promise.get_future().share();
+  std::atomic<bool> done{false};
+  void now() {
+    if (!done.exchange(true)) promise.set_value();
+  }
+};
+
+// A refinement beside the generations that does not end (held on purpose until the test lets it
+// go, as a long fit or a covariance that cannot be cancelled mid-way would be) never holds the
+// worker: updates go on, and a new model (replaceModel) or reset() cancels it and leaves it to end
+// on its own, its answer never handed over. Each update() runs on a thread of its own so that a
+// worker that waited would show as a failure rather than hang the test: the 60-s wait only
+// catches that deadlock (a passing run never comes near it).
+TEST(OnlineEstimator, TheWorkerNeverWaitsForABackgroundRefinement) {
+  Fixture f;
+  mme::OnlineEstimatorOptions options;
+  options.window_frames = 60;
+  options.es.population = 20;
+  options.es.offspring = 20;
+  auto release = std::make_shared<Release>();
+  auto started = std::make_shared<std::atomic<int>>(0);
+  options.on_background_thread_start = [release, started] {
+    ++*started;
+    release->future.wait();
+  };
+  mme::OnlineEstimator estimator(f.search, options);
+  // Destroyed before the estimator, whose destructor joins the held threads.
+  const std::unique_ptr<Release, void (*)(Release*)> release_first(release.get(), [](Release* r) { r->now(); });
+  auto update = [&]() {
+    std::future<bool> result = std::async(std::launch::async, [&] { return estimator.update(); });
+    if (result.wait_for(std::chrono::seconds(60)) == std::future_status::ready) return result.get();
+    ADD_FAILURE() << "update() waited for the background refinement";
+    release->now();
+    return result.get();
+  };
+  feed(&estimator, f.data, 0, 60);
+  for (int u = 0; u < 50 && *started == 0; ++u) ASSERT_TRUE(update());
+  ASSERT_EQ(*started, 1) << "no refinement started";
+  const uint32_t generation = estimator.estimate().generation;
+  for (int u = 0; u < 5; ++u) {  // the refinement is held: the generations go on
+    feed(&estimator, f.data, 60 + u, 1);
+    ASSERT_TRUE(update());
+  }
+  EXPECT_GT(estimator.estimate().generation, generation);
+  estimator.replaceModel(f.search);  // the held refinement belongs to the old model
+  ASSERT_TRUE(update());
+  for (int u = 0; u < 50 && *started < 2; ++u) ASSERT_TRUE(update());
+  ASSERT_EQ(*started, 2) << "no refinement started on the new model";
+  estimator.reset(false);  // a second held one, now for a population that is dropped
+  ASSERT_TRUE(update());
+  ASSERT_TRUE(update());
+  EXPECT_EQ(estimator.estimate().refinements, 0u);  // neither answer was handed over
+  release->now();
 }
 
 // On a window that stops sliding, the online estimate's cost comes within 2x of what identify

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -38,6 +39,9 @@ struct OnlineEstimatorOptions {
   /// [s] a refinement running beside the generations stops after this long (its best so far is
   /// handed over as usual).
   double refine_max_s = 10.0;
+  /// Called first on each thread the estimator starts beside the worker (the refinements), e.g.
+  /// to name it or lower its priority so that the worker gets the cores first (may be empty).
+  std::function<void()> on_background_thread_start;
   /// Which cost gives the published estimate (identifier.h): kAuto picks the output-error
   /// estimator when the first window's estimated marker noise reaches auto_noise_threshold_m.
   /// It runs beside the generations after each refinement, warm-started from its last answer.
@@ -105,8 +109,9 @@ struct InputCounters {
 
 /// The refinement of the best individual (the engine's periodic one) runs beside the generations
 /// on a thread of its own, on the window of the moment it starts; when it ends, its answer is
-/// offered to the population on the window of that moment. update() never waits for it, so an
-/// update takes about update_budget_s whatever the model's size.
+/// offered to the population on the window of that moment. update() never waits for it, not
+/// even when the model changes (the refinement is then cancelled and left to end on its own),
+/// so an update takes about update_budget_s whatever the model's size.
 class OnlineEstimator {
  public:
   /// Throws InputError when the model or options are unusable.
@@ -206,13 +211,21 @@ class OnlineEstimator {
   void handOverRefinement();
   void startRefinement(std::shared_ptr<const Cost> cost, const Model& model,
                        const Trajectory& window);
-  void stopRefinement();
+  /// Cancels the running refinement (its answer belongs to an older model) and moves it to
+  /// retired_, without waiting for it: a fit may take a while to notice the cancel (a
+  /// covariance or a Ceres iteration runs to its end), and update() never waits for it.
+  void retireRefinement();
+  /// Joins the retired refinements that have ended (they no longer compute).
+  void reapRetiredRefinements();
 
   mutable std::mutex update_mutex_;  // guards es_, es_version_ and refinement_ (held through update())
   const OnlineEstimatorOptions options_;  // never changes after construction
   std::unique_ptr<EvolutionStrategy> es_;
   uint64_t es_version_ = 0;  // the model_version_ es_ was built for
   std::unique_ptr<BackgroundRefinement> refinement_;
+  /// Cancelled refinements still running (guarded by update_mutex_); joined once ended, or by
+  /// the destructor.
+  std::vector<std::unique_ptr<BackgroundRefinement>> retired_;
   int last_refine_generation_ = -1;  // es_'s generation when the last refinement started
   uint32_t refinements_done_ = 0;
   RefineStatus last_refine_status_ = RefineStatus::kNotRun;

@@ -40,6 +40,8 @@
 
 namespace mme {
 
+struct StructureCandidate;
+
 struct StructureOptions {
   int neighbours = 8;             ///< candidate pairs: each particle's k nearest (mean distance)
   double rigid_relative_std = 0.02;  ///< ... and pairs whose distance's std / mean is below this
@@ -70,6 +72,12 @@ struct StructureOptions {
   double max_wall_time_s = 0.0;
   IdentifyOptions identify;       ///< the refits' settings
   std::function<void(const std::string&)> progress;  ///< a line per step (may be empty)
+  /// Called once, on the selection's thread, as soon as the first level is judged, with that
+  /// candidate (its model at the selection's rate, the data's when the model states none; the
+  /// result's models carry the given model's own setting): a caller that cannot wait
+  /// for the later levels (the live node) may use it at once while the selection goes on (may
+  /// be empty).
+  std::function<void(const StructureCandidate&)> on_first_level;
 };
 
 /// One candidate model tried.
