@@ -13,6 +13,7 @@
 #include "motion_model_estimation/core/trajectory.h"
 #include "motion_model_estimation/identification/search/evolution_strategy.h"
 #include "motion_model_estimation/identification/search/island_model.h"
+#include "motion_model_estimation/identification/estimators/covariance.h"
 #include "motion_model_estimation/identification/estimators/estimator_kind.h"
 #include "motion_model_estimation/identification/estimators/output_error.h"
 
@@ -132,10 +133,11 @@ IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
 std::vector<ParameterFlag> parameterFlags(const ParameterSpace& space, const std::vector<double>& genes,
                                           const std::vector<uint8_t>* unidentifiable = nullptr);
 
-/// 1-sigma uncertainty of each parameter at `genes` (Gauss-Newton: Cov = s^2 (J^T J)^-1 with J
-/// the residuals' Jacobian, s^2 = cost / (residuals - genes)). NaN where not defined (the
-/// thresholds of conditional bonds, a singular J^T J). `pool` may be null.
-std::vector<double> estimateStdDevs(const Cost& cost, const ParameterSpace& space,
-                                    const std::vector<double>& genes, ThreadPool* pool = nullptr);
+/// 1-sigma uncertainty of each parameter at `genes` and whether the data determine it
+/// (covariance.h: Cov = s^2 (J^T J)^+ with J the residuals' forward-difference Jacobian over the
+/// smooth genes, s^2 = cost / (residuals - genes)). NaN where not defined (the thresholds of
+/// conditional bonds, undetermined parameters). `pool` may be null.
+GeneUncertainty estimateStdDevs(const Cost& cost, const ParameterSpace& space,
+                                const std::vector<double>& genes, ThreadPool* pool = nullptr);
 
 }  // namespace mme
