@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <random>
 #include <stdexcept>
 
 #include <Eigen/Dense>
@@ -14,12 +15,14 @@
 
 namespace {
 
-/// A deterministic dense m x n Jacobian with columns of different scales (units).
+/// A deterministic dense m x n Jacobian of full column rank with columns of different scales
+/// (units): uniform entries in [-1, 1) from a fixed generator's raw output.
 Eigen::MatrixXd denseJacobian(Eigen::Index m, Eigen::Index n) {
+  std::mt19937_64 generator(38);
   Eigen::MatrixXd j(m, n);
   for (Eigen::Index i = 0; i < m; ++i)
     for (Eigen::Index k = 0; k < n; ++k)
-      j(i, k) = std::sin(0.7 * static_cast<double>(i) + 1.3 * static_cast<double>(k * k) + 0.1) *
+      j(i, k) = (2.0 * static_cast<double>(generator() >> 11) * 0x1.0p-53 - 1.0) *
                 std::pow(10.0, static_cast<double>(k % 3) - 1.0);
   return j;
 }
