@@ -51,7 +51,7 @@ struct IdentifyOptions {
   /// generation or refinement under way with its best so far (IdentifyStop::kCancelled) and the
   /// output error is not started (one under way stops after its iteration). May be null.
   const std::atomic<bool>* cancel = nullptr;
-  bool estimate_std = true;      ///< finite-difference Hessian at the optimum
+  bool estimate_std = true;      ///< 1-sigma std and unidentifiable flags at the answer (covariance.h)
   /// Stop once converged: after a refinement has run, when the best cost fell by less than a
   /// relative 1e-4 over this many generations, or sits at the round-off floor (1e-26 m^2 per
   /// residual); twice this when a threshold (min/max_distance) is free. 0 = run the whole
