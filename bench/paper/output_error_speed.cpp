@@ -64,7 +64,8 @@ mme::OutputErrorResult fitCase(const Settings& s, std::FILE* f, const Case& c, c
               r.converged ? "converged" : "not converged", r.observation_cost_m2);
   if (!c.truth.empty())
     std::printf(", median error %.4g %% = %.2f x the bound", median, median / c.bound_median_percent);
-  std::printf("; jacobian: %s\n", r.jacobian.c_str());
+  std::printf("; jacobian: %s%s%s\n", mme::outputErrorJacobianName(r.jacobian),
+              r.exact_jacobian_unsupported.empty() ? "" : ": ", r.exact_jacobian_unsupported.c_str());
   std::fflush(stdout);
   return r;
 }

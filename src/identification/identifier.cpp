@@ -67,43 +67,41 @@ std::vector<ParameterFlag> parameterFlags(const ParameterSpace& space, const std
   return flags;
 }
 
-std::vector<double> estimateStdDevs(const Cost& cost, const ParameterSpace& space,
-                                    const std::vector<double>& genes, ThreadPool* pool) {
-  // Gauss-Newton: Cov(genes) = s^2 (J^T J)^-1 with s^2 = cost / (residuals - genes), J the
-  // residuals' Jacobian over the smooth genes (a threshold has no slope: no std).
+GeneUncertainty estimateStdDevs(const Cost& cost, const ParameterSpace& space,
+                                const std::vector<double>& genes, ThreadPool* pool) {
+  // Gauss-Newton at the answer (covariance.h): J the residuals' Jacobian over the smooth genes
+  // (a threshold has no slope: no std), s^2 = cost / (residuals - genes).
   const size_t n = genes.size();
-  std::vector<double> out(n, std::numeric_limits<double>::quiet_NaN());
+  GeneUncertainty out;
+  out.std_devs.assign(n, std::numeric_limits<double>::quiet_NaN());
+  out.unidentifiable.assign(n, 0);
   std::vector<size_t> active;
   for (size_t k = 0; k < n; ++k)
     if (space.gene(k).smooth) active.push_back(k);
   const double dof = static_cast<double>(cost.residualCount()) - static_cast<double>(n);
-  if (active.empty() || dof <= 0) return out;
+  if (active.empty()) return out;
+  if (dof <= 0) {
+    out.failure = "the one-step cost has no more residuals than parameters";
+    return out;
+  }
   std::vector<double> r;
   const double c = cost.residuals(space.toPhysical(genes), &r);
-  if (!std::isfinite(c)) return out;
-  const Eigen::VectorXd residual = Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
-  ResidualJacobian jac;
-  if (!forwardJacobian(cost, space, genes, residual, active, 100000000, pool, &jac))
+  if (!std::isfinite(c)) {
+    out.failure = "the one-step cost is not finite at the answer";
     return out;
-  Eigen::MatrixXd jtj;
-  Eigen::VectorXd g;
-  normalEquations(jac, residual, &jtj, &g);
-  const Eigen::Index na = static_cast<Eigen::Index>(active.size());
-  Eigen::VectorXd scale(na);
-  for (Eigen::Index j = 0; j < na; ++j) scale[j] = jtj(j, j) > 0.0 ? 1.0 / std::sqrt(jtj(j, j)) : 0.0;
-  const Eigen::MatrixXd scaled = scale.asDiagonal() * jtj * scale.asDiagonal();
-  Eigen::LDLT<Eigen::MatrixXd> ldlt(scaled);
-  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return out;
-  const Eigen::MatrixXd inv = ldlt.solve(Eigen::MatrixXd::Identity(na, na));
-  const double s2 = std::max(c, 0.0) / dof;
-  for (Eigen::Index j = 0; j < na; ++j) {
-    const size_t k = active[static_cast<size_t>(j)];
-    if (!(scale[j] > 0.0) || !(inv(j, j) >= 0.0)) continue;
-    const double gene_std = std::sqrt(s2 * inv(j, j)) * scale[j];
-    // Log genes: d(value) = value d(gene); a clamp-length gene: d(tau) = (1 + tau) d(gene).
-    out[k] = std::abs(space.physicalSlope(k, genes)) * gene_std;
   }
-  return out;
+  const Eigen::VectorXd residual =
+      Eigen::Map<const Eigen::VectorXd>(r.data(), static_cast<Eigen::Index>(r.size()));
+  ResidualJacobian jac;
+  if (!forwardJacobian(cost, space, genes, residual, active, 100000000, pool, &jac)) {
+    out.failure = "the one-step cost's Jacobian is too large to store";
+    return out;
+  }
+  CovarianceOptions options;
+  options.residual_variance = std::max(c, 0.0) / dof;
+  const ParameterCovariance covariance =
+      parameterCovariance(jac.toSparse(), static_cast<Eigen::Index>(active.size()), options);
+  return geneUncertainty(covariance, space, genes, active);
 }
 
 namespace {
@@ -501,6 +499,7 @@ class Identification {
     r_.std_missing_reason = outcome.std_missing_reason;
     std_devs_ = oe.std_devs;
     unidentifiable_ = oe.unidentifiable;
+    if (!oe.std_failure.empty() && r_.std_missing_reason.empty()) r_.std_missing_reason = oe.std_failure;
     omega_h_ = omegaH(r_.values);
   }
 
@@ -522,6 +521,17 @@ class Identification {
     }
   }
 
+  /// The one-step answer's std and unidentifiable flags (the output error brings its own).
+  void shortTermUncertainty() {
+    std_devs_.assign(r_.values.size(), std::numeric_limits<double>::quiet_NaN());
+    unidentifiable_.assign(r_.values.size(), 0);
+    if (!options_.estimate_std || stop_ == IdentifyStop::kCancelled) return;
+    GeneUncertainty u = estimateStdDevs(*cost_, *space_, best_genes_);
+    std_devs_ = std::move(u.std_devs);
+    unidentifiable_ = std::move(u.unidentifiable);
+    if (!u.failure.empty() && r_.std_missing_reason.empty()) r_.std_missing_reason = u.failure;
+  }
+
   IdentifyResult result() {
     r_.generations = generations_done_;
     r_.evaluations = evaluations_done_;
@@ -536,11 +546,8 @@ class Identification {
     r_.substeps = model_.substeps;
     r_.stiffest_omega_h = omega_h_;
     r_.notes = notes_;
+    if (r_.estimator == Estimator::kShortTerm) shortTermUncertainty();
     r_.flags = parameterFlags(*space_, best_genes_, &unidentifiable_);
-    if (r_.estimator == Estimator::kShortTerm)
-      std_devs_ = options_.estimate_std && stop_ != IdentifyStop::kCancelled
-                      ? estimateStdDevs(*cost_, *space_, best_genes_)
-                      : std::vector<double>(r_.values.size(), std::numeric_limits<double>::quiet_NaN());
     thresholdUncertainty();
     r_.std_devs = std_devs_;
     r_.model = model_;

@@ -79,6 +79,45 @@ TEST(Identifier, AtAMillimetreTheOutputErrorAtTheNoiseIsAdopted) {
   EXPECT_LT(errors[errors.size() / 2], 0.05) << "median relative error";
 }
 
+// The one-step cost's std (covariance.h on its forward-difference Jacobian): a spring type whose
+// only bond joins two fixed particles moves no residual, so its parameters are flagged with no
+// std, and the others keep the std of the same model without that type (only the degrees of
+// freedom in s^2 = cost / (residuals - genes) differ).
+TEST(Identifier, OneStepStdFlagsWhatTheDataCannotDetermine) {
+  mme::Model plain = mme::test::smallObject();
+  mme::test::addParticle(&plain, Eigen::Vector3d(1, 1, 1), 1.0, true);
+  mme::test::addParticle(&plain, Eigen::Vector3d(1.2, 1, 1), 1.0, true);
+  mme::Model idle = plain;
+  const int type = mme::test::addType(&idle, "idle", mme::BondKind::kSpring,
+                                      {{mme::kStiffness, 5.0}, {mme::kRestLength, 0.15}});
+  const int last = static_cast<int>(idle.particles.size()) - 1;
+  mme::test::addBond(&idle, type, last - 1, last);
+  mme::Trajectory data = mme::simulateTrajectory(idle, 60, 100.0);
+  mme::addGaussianNoise(&data, 1e-4, 4);
+  const auto uncertainty = [&](const mme::Model& model, size_t* residuals) {
+    const mme::Model search = mme::test::withoutValues(model);
+    const mme::ShortTermCost cost(search, data);
+    const mme::ParameterSpace space(search, data);
+    *residuals = cost.residualCount();
+    return mme::estimateStdDevs(cost, space, space.toSearch(mme::getValues(model, mme::freeParameters(model))));
+  };
+  size_t m = 0;
+  const mme::GeneUncertainty without = uncertainty(plain, &m);
+  const mme::GeneUncertainty with = uncertainty(idle, &m);
+  ASSERT_TRUE(with.failure.empty()) << with.failure;
+  const size_t n = without.std_devs.size();
+  ASSERT_EQ(with.std_devs.size(), n + 2);
+  EXPECT_TRUE(with.unidentifiable[n]);      // idle/stiffness
+  EXPECT_TRUE(with.unidentifiable[n + 1]);  // idle/rest_length
+  EXPECT_TRUE(std::isnan(with.std_devs[n]) && std::isnan(with.std_devs[n + 1]));
+  const double dof_ratio = std::sqrt(static_cast<double>(m - n) / static_cast<double>(m - n - 2));
+  for (size_t k = 0; k < n; ++k) {
+    EXPECT_FALSE(with.unidentifiable[k]) << k;
+    ASSERT_TRUE(std::isfinite(without.std_devs[k]) && without.std_devs[k] > 0.0) << k;
+    EXPECT_NEAR(with.std_devs[k], without.std_devs[k] * dof_ratio, 1e-9 * without.std_devs[k]) << k;
+  }
+}
+
 TEST(Identifier, DefaultEngineIdentifiesAHangingObjectWithoutBoundsAndStopsOnceConverged) {
   Hanging h;
   mme::IdentifyOptions options = mme::identifyOptionsFor(mme::Preset::kDefault);

@@ -13,6 +13,7 @@
 #include "motion_model_estimation/core/trajectory.h"
 #include "motion_model_estimation/identification/search/evolution_strategy.h"
 #include "motion_model_estimation/identification/search/island_model.h"
+#include "motion_model_estimation/identification/estimators/covariance.h"
 #include "motion_model_estimation/identification/estimators/estimator_kind.h"
 #include "motion_model_estimation/identification/estimators/output_error.h"
 
@@ -50,7 +51,7 @@ struct IdentifyOptions {
   /// generation or refinement under way with its best so far (IdentifyStop::kCancelled) and the
   /// output error is not started (one under way stops after its iteration). May be null.
   const std::atomic<bool>* cancel = nullptr;
-  bool estimate_std = true;      ///< finite-difference Hessian at the optimum
+  bool estimate_std = true;      ///< 1-sigma std and unidentifiable flags at the answer (covariance.h)
   /// Stop once converged: after a refinement has run, when the best cost fell by less than a
   /// relative 1e-4 over this many generations, or sits at the round-off floor (1e-26 m^2 per
   /// residual); twice this when a threshold (min/max_distance) is free. 0 = run the whole
@@ -132,10 +133,11 @@ IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
 std::vector<ParameterFlag> parameterFlags(const ParameterSpace& space, const std::vector<double>& genes,
                                           const std::vector<uint8_t>* unidentifiable = nullptr);
 
-/// 1-sigma uncertainty of each parameter at `genes` (Gauss-Newton: Cov = s^2 (J^T J)^-1 with J
-/// the residuals' Jacobian, s^2 = cost / (residuals - genes)). NaN where not defined (the
-/// thresholds of conditional bonds, a singular J^T J). `pool` may be null.
-std::vector<double> estimateStdDevs(const Cost& cost, const ParameterSpace& space,
-                                    const std::vector<double>& genes, ThreadPool* pool = nullptr);
+/// 1-sigma uncertainty of each parameter at `genes` and whether the data determine it
+/// (covariance.h: Cov = s^2 (J^T J)^+ with J the residuals' forward-difference Jacobian over the
+/// smooth genes, s^2 = cost / (residuals - genes)). NaN where not defined (the thresholds of
+/// conditional bonds, undetermined parameters). `pool` may be null.
+GeneUncertainty estimateStdDevs(const Cost& cost, const ParameterSpace& space,
+                                const std::vector<double>& genes, ThreadPool* pool = nullptr);
 
 }  // namespace mme

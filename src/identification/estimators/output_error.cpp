@@ -27,6 +27,7 @@
 #include "motion_model_estimation/core/error.h"
 #include "motion_model_estimation/core/observations.h"
 #include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/identification/estimators/covariance.h"
 #include "motion_model_estimation/identification/estimators/motion_sensitivity.h"
 #include "output_error_segments.h"
 
@@ -124,12 +125,11 @@ std::string setUpProblem(const Model& model, const Trajectory& trajectory, const
   p->w_obs = 1.0 / out->noise_std_prior_m;
   p->w_cont = options.continuity_weight / out->noise_std_prior_m;
   p->exact_jacobian = options.jacobian == OutputErrorJacobian::kExact;
-  out->jacobian = "finite differences";
   if (p->exact_jacobian) {
-    const std::string why_not = sensitivityUnsupportedReason(model);
-    p->exact_jacobian = why_not.empty();
-    out->jacobian = why_not.empty() ? "exact" : "finite differences: " + why_not;
+    out->exact_jacobian_unsupported = sensitivityUnsupportedReason(model);
+    p->exact_jacobian = out->exact_jacobian_unsupported.empty();
   }
+  out->jacobian = p->exact_jacobian ? OutputErrorJacobian::kExact : OutputErrorJacobian::kFiniteDifferences;
   return "";
 }
 
@@ -293,55 +293,31 @@ int solveWithContinuation(Problem* p, const OutputErrorOptions& options, double 
   return first_stage_iterations + static_cast<int>(summary->iterations.size()) - 1;
 }
 
-/// Fisher information of theta with the states eliminated (Schur complement):
-/// I = A - B C^-1 B^T from J^T J = [A B; B^T C], then Cov = I^+ (sigma_hat / sigma_prior)^2.
-/// Fills out->std_devs and out->unidentifiable (directions with a relative eigenvalue below
-/// 1e-10 of the unit-diagonal information are what the data do not determine).
+/// The parameters' std from the whole problem's Jacobian at the optimum, the segment states
+/// marginalised (covariance.h), scaled by (sigma_hat / sigma_prior)^2: the residuals are weighted
+/// by the prior noise, and the residuals at the optimum measure the actual one.
 void estimateStd(const Problem& p, const ParameterSpace& space, const OutputErrorOptions& options,
                  SegmentUnknowns* u, ceres::Problem* problem, OutputErrorResult* out) {
   ceres::CRSMatrix crs;
   ceres::Problem::EvaluateOptions eval;
   eval.parameter_blocks.push_back(u->theta.data());
   for (int s = 0; s < u->count(); ++s) eval.parameter_blocks.push_back(u->states[s].data());
-  if (!problem->Evaluate(eval, nullptr, nullptr, nullptr, &crs)) return;
-  const int np = static_cast<int>(u->theta.size());
-  Eigen::SparseMatrix<double> j(crs.num_rows, crs.num_cols);
-  std::vector<Eigen::Triplet<double>> entries;
-  for (int row = 0; row < crs.num_rows; ++row)
-    for (int e = crs.rows[row]; e < crs.rows[row + 1]; ++e) entries.emplace_back(row, crs.cols[e], crs.values[e]);
-  j.setFromTriplets(entries.begin(), entries.end());
-  const Eigen::SparseMatrix<double> jtj = Eigen::SparseMatrix<double>(j.transpose() * j);
-  const Eigen::MatrixXd a = Eigen::MatrixXd(jtj.topLeftCorner(np, np));
-  const Eigen::MatrixXd b = Eigen::MatrixXd(jtj.topRightCorner(np, crs.num_cols - np));
-  const Eigen::SparseMatrix<double> c = jtj.bottomRightCorner(crs.num_cols - np, crs.num_cols - np);
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(c);
-  Eigen::MatrixXd info = a;
-  if (ldlt.info() == Eigen::Success) info -= b * ldlt.solve(Eigen::MatrixXd(b.transpose()));
-  Eigen::VectorXd d = info.diagonal().cwiseMax(0.0).cwiseSqrt();
-  for (int k = 0; k < np; ++k) d[k] = d[k] > 0.0 ? 1.0 / d[k] : 0.0;
-  const Eigen::MatrixXd scaled = d.asDiagonal() * info * d.asDiagonal();
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled);
-  const Eigen::VectorXd lambda = eig.eigenvalues();
-  const double top = std::max(lambda.maxCoeff(), 1e-300);
-  Eigen::MatrixXd pinv = Eigen::MatrixXd::Zero(np, np);
-  Eigen::VectorXd null_loading = Eigen::VectorXd::Zero(np);
-  for (int q = 0; q < np; ++q) {
-    const Eigen::VectorXd v = eig.eigenvectors().col(q);
-    if (lambda[q] > 1e-10 * top) pinv += v * v.transpose() / lambda[q];
-    else null_loading += v.cwiseProduct(v);
+  if (!problem->Evaluate(eval, nullptr, nullptr, nullptr, &crs)) {
+    out->std_failure = "the Jacobian at the optimum could not be evaluated";
+    return;
   }
-  const double scale2 = options.std_from_given_noise ? 1.0 : std::pow(out->noise_std_m / out->noise_std_prior_m, 2);
-  for (int k = 0; k < np; ++k) {
-    const size_t gene = static_cast<size_t>(p.smooth[k]);
-    const double gene_var = pinv(k, k) * d[k] * d[k] * scale2;
-    const double sd = std::abs(space.physicalSlope(gene, out->genes)) * std::sqrt(std::max(gene_var, 0.0));
-    if (null_loading[k] > 0.5 || !(d[k] > 0.0)) {
-      out->unidentifiable[gene] = 1;
-      continue;
-    }
-    out->std_devs[gene] = sd;
-    if (sd > std::abs(out->values[gene])) out->unidentifiable[gene] = 1;
-  }
+  const Eigen::SparseMatrix<double> jacobian =
+      sparseFromCompressedRows(crs.num_rows, crs.num_cols, crs.rows, crs.cols, crs.values);
+  CovarianceOptions covariance_options;
+  covariance_options.residual_variance =
+      options.std_from_given_noise ? 1.0 : std::pow(out->noise_std_m / out->noise_std_prior_m, 2);
+  const ParameterCovariance covariance =
+      parameterCovariance(jacobian, static_cast<Eigen::Index>(u->theta.size()), covariance_options);
+  const std::vector<size_t> column_genes(p.smooth.begin(), p.smooth.end());
+  GeneUncertainty genes = geneUncertainty(covariance, space, out->genes, column_genes);
+  out->std_failure = genes.failure;
+  out->std_devs = std::move(genes.std_devs);
+  out->unidentifiable = std::move(genes.unidentifiable);
 }
 
 /// One fit on the whole trajectory (the stages of OutputErrorOptions::grow_segments call it on
@@ -405,6 +381,14 @@ OutputErrorResult fitOnce(const Model& model, const Trajectory& trajectory,
 }
 
 }  // namespace
+
+const char* outputErrorJacobianName(OutputErrorJacobian jacobian) {
+  switch (jacobian) {
+    case OutputErrorJacobian::kExact: return "exact";
+    case OutputErrorJacobian::kFiniteDifferences: return "finite differences";
+  }
+  return "?";
+}
 
 OutputErrorResult estimateOutputError(const Model& model, const Trajectory& trajectory,
                                       const ParameterSpace& space,

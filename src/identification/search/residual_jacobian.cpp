@@ -27,6 +27,18 @@ Eigen::VectorXd ResidualJacobian::gradient(const Eigen::VectorXd& residual) cons
   return g;
 }
 
+Eigen::SparseMatrix<double> ResidualJacobian::toSparse() const {
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(nonZeros());
+  for (size_t k = 0; k < rows.size(); ++k)
+    for (size_t e = 0; e < rows[k].size(); ++e)
+      entries.emplace_back(static_cast<Eigen::Index>(rows[k][e]), static_cast<Eigen::Index>(k), values[k][e]);
+  Eigen::SparseMatrix<double> j(static_cast<Eigen::Index>(rows_count),
+                                static_cast<Eigen::Index>(rows.size()));
+  j.setFromTriplets(entries.begin(), entries.end());
+  return j;
+}
+
 void normalEquations(const ResidualJacobian& jac, const Eigen::VectorXd& residual,
                      Eigen::MatrixXd* jtj, Eigen::VectorXd* g, NormalEquationsPath path) {
   const size_t n = jac.rows.size();

@@ -382,8 +382,10 @@ TEST(OutputError, ExactJacobiansReachTheFiniteDifferencesAnswer) {
   o.jacobian = mme::OutputErrorJacobian::kExact;
   const mme::OutputErrorResult exact = mme::estimateOutputError(n.search, data, space, start, o);
   ASSERT_TRUE(fd.ran && exact.ran);
-  EXPECT_EQ(fd.jacobian, "finite differences");
-  EXPECT_EQ(exact.jacobian, "exact");
+  EXPECT_EQ(fd.jacobian, mme::OutputErrorJacobian::kFiniteDifferences);
+  EXPECT_EQ(exact.jacobian, mme::OutputErrorJacobian::kExact);
+  EXPECT_TRUE(fd.exact_jacobian_unsupported.empty());
+  EXPECT_TRUE(exact.exact_jacobian_unsupported.empty()) << exact.exact_jacobian_unsupported;
   EXPECT_TRUE(exact.converged) << exact.termination;
   EXPECT_LT(maxRelativeError(exact.values, fd.values), 1e-6);
   EXPECT_NEAR(exact.observation_cost_m2, fd.observation_cost_m2, 1e-9 * fd.observation_cost_m2);
@@ -434,7 +436,8 @@ TEST(OutputError, MusclesFallBackToFiniteDifferencesAndSaySo) {
   const mme::OutputErrorResult r =
       mme::estimateOutputError(m, data, space, space.toSearch(mme::getValues(m, mme::freeParameters(m))), o);
   ASSERT_TRUE(r.ran) << r.reason;
-  EXPECT_EQ(r.jacobian.rfind("finite differences: muscles", 0), 0u) << r.jacobian;
+  EXPECT_EQ(r.jacobian, mme::OutputErrorJacobian::kFiniteDifferences);
+  EXPECT_EQ(r.exact_jacobian_unsupported.rfind("muscles", 0), 0u) << r.exact_jacobian_unsupported;
 }
 
 }  // namespace

@@ -36,6 +36,7 @@ TEST(ResidualJacobian, NormalEquationsAgreeOnBothPaths) {
   const Eigen::MatrixXd want_jtj = dense.transpose() * dense;
   const Eigen::VectorXd want_g = dense.transpose() * r;
   EXPECT_EQ(jac.nonZeros(), static_cast<size_t>((dense.array() != 0.0).count()));
+  EXPECT_EQ(Eigen::MatrixXd(jac.toSparse()), dense);
   for (auto path : {mme::NormalEquationsPath::kDense, mme::NormalEquationsPath::kSparse,
                     mme::NormalEquationsPath::kAuto}) {
     Eigen::MatrixXd jtj;

@@ -29,11 +29,14 @@ double estimateMarkerNoise(const Trajectory& trajectory);
 enum class OutputErrorJacobian {
   /// Forward sensitivities through the motion law (motion_sensitivity.h): exact, one
   /// simulation per segment. A model they do not cover (sensitivityUnsupportedReason) falls
-  /// back to finite differences (OutputErrorResult::jacobian says why).
+  /// back to finite differences (OutputErrorResult::exact_jacobian_unsupported says why).
   kExact,
   /// Forward differences: one simulation per column; kept to compare against (bench).
   kFiniteDifferences,
 };
+
+/// "exact" or "finite differences" (the command line's and the bench's word).
+const char* outputErrorJacobianName(OutputErrorJacobian jacobian);
 
 /// The linear solver of the output error's Gauss-Newton steps (Ceres' names). The Schur ones
 /// eliminate an independent set of segment states first (every other one: a continuity block
@@ -104,11 +107,15 @@ struct OutputErrorResult {
   std::vector<double> genes;        ///< search space, as the start's (thresholds unchanged)
   std::vector<double> values;       ///< physical, freeParameters order
   /// 1-sigma from the Fisher information J^T J / sigma^2 of the whole problem, the segment states
-  /// eliminated (their uncertainty propagated); NaN for thresholds and undetermined parameters.
+  /// marginalised (their uncertainty propagated; covariance.h); NaN for thresholds and
+  /// undetermined parameters.
   std::vector<double> std_devs;
   /// The data do not determine it: it lies (mostly) in the information matrix's null space, or
   /// its std is larger than its value.
   std::vector<uint8_t> unidentifiable;
+  /// Why every std is NaN although it was asked for (the covariance could not be computed);
+  /// empty otherwise.
+  std::string std_failure;
   double noise_std_m = 0.0;         ///< from the residuals at the optimum (RMS per coordinate)
   double noise_std_prior_m = 0.0;   ///< the one the weights used (given or estimated)
   double observation_cost_m2 = 0.0; ///< sum of squared position errors at the optimum [m^2]
@@ -122,8 +129,11 @@ struct OutputErrorResult {
   /// the answer is where the solver was, not an optimum.
   bool stopped_by_time = false;
   std::string termination;          ///< Ceres' message
-  /// "exact", or "finite differences" and, when exact ones were asked for, why not.
-  std::string jacobian;
+  /// The Jacobian the fit used (finite differences when asked for, or when the model has
+  /// something the exact sensitivities do not cover).
+  OutputErrorJacobian jacobian = OutputErrorJacobian::kFiniteDifferences;
+  /// Exact Jacobians were asked for but not used: why (the model's unsupported part); else empty.
+  std::string exact_jacobian_unsupported;
   /// Where the solves' time went (Ceres' summaries, every stage): forming the Jacobians, and the
   /// linear solver (the normal equations or the Schur complement, and their factorisation) [s].
   double jacobian_time_s = 0.0;

@@ -1,7 +1,7 @@
 // The Jacobian of the cost's residuals with respect to the search-space genes, by forward
 // differences, and the Gauss-Newton normal equations built from it. Two users need the same
 // derivatives: the Levenberg-Marquardt refinement (ceres_levenberg_marquardt.h, which hands the
-// columns to Ceres) and the identifier's parameter standard deviations (J^T J at the answer).
+// columns to Ceres) and the identifier's parameter standard deviations (covariance.h at the answer).
 // One residual evaluation per gene, columns computed in parallel (each column is independent: the
 // result does not depend on the thread count). A gene moves only the terms near its bond type's
 // sites, and the other entries of a forward difference are exactly zero, so the Jacobian is kept
@@ -13,6 +13,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 
 #include "motion_model_estimation/core/cost.h"
 #include "motion_model_estimation/core/thread_pool.h"
@@ -29,6 +30,8 @@ struct ResidualJacobian {
   size_t nonZeros() const;
   /// J^T r.
   Eigen::VectorXd gradient(const Eigen::VectorXd& residual) const;
+  /// J as an Eigen sparse matrix (m x n).
+  Eigen::SparseMatrix<double> toSparse() const;
 };
 
 /// The forward-difference step of a gene at x (search space): relative to the gene, or to its
