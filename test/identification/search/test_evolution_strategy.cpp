@@ -247,6 +247,42 @@ TEST(EvolutionStrategy, ImmigrantsReplaceTheWorstOnlyWhenBetter) {
   EXPECT_THROW(weak.immigrate(wrong), mme::InputError);
 }
 
+// The same best broadcast by several islands arrives several times: it enters once, and an
+// arrival equal to an individual already in the population does not enter at all.
+TEST(EvolutionStrategy, IdenticalImmigrantsEnterOnce) {
+  Fixture f;
+  mme::EsOptions options;
+  options.population = 20;
+  options.offspring = 20;
+  options.refine_period = 0;
+  mme::EvolutionStrategy strong(mme::ParameterSpace(f.search, f.data), options);
+  strong.setCost(f.cost);
+  for (int g = 0; g < 40; ++g) strong.step();
+  options.seed = 7;
+  mme::EvolutionStrategy weak(mme::ParameterSpace(f.search, f.data), options);
+  weak.setCost(f.cost);
+  weak.step();
+  ASSERT_LT(strong.best().cost, weak.best().cost);
+
+  const mme::Individual best = strong.emigrants(1).at(0);
+  const uint64_t evaluations_before = weak.evaluations();
+  EXPECT_EQ(weak.immigrate({best, best, best}), 1);
+  auto copies = [&weak](const std::vector<double>& genes) {
+    return std::count_if(weak.population().begin(), weak.population().end(),
+                         [&genes](const mme::Individual& ind) { return ind.genes == genes; });
+  };
+  EXPECT_EQ(copies(best.genes), 1);
+  EXPECT_EQ(weak.evaluations() - evaluations_before, 1u);  // the copies are not even evaluated
+  EXPECT_EQ(weak.operatorSuccesses()[static_cast<int>(mme::Operator::kImmigrant)], 1u);
+
+  // Already there: skipped, the population unchanged.
+  const std::vector<mme::Individual> before = weak.population();
+  EXPECT_EQ(weak.immigrate({best}), 0);
+  ASSERT_EQ(weak.population().size(), before.size());
+  for (size_t i = 0; i < before.size(); ++i) EXPECT_EQ(weak.population()[i].genes, before[i].genes);
+  EXPECT_EQ(copies(best.genes), 1);
+}
+
 // The engine with the Levenberg-Marquardt refinement from generation 5 identifies the small
 // object in 10 generations; the algorithm is parsed by name.
 TEST(EvolutionStrategy, LevenbergMarquardtRefinementIdentifiesTheSmallObjectEarly) {
