@@ -440,22 +440,6 @@ std::vector<Individual> EvolutionStrategy::emigrants(int count) const {
   return out;
 }
 
-void EvolutionStrategy::dropKnownGenes(std::vector<Individual>* arrivals) const {
-  std::vector<const std::vector<double>*> known;
-  known.reserve(population_.size() + arrivals->size());
-  for (const Individual& ind : population_) known.push_back(&ind.genes);
-  std::vector<Individual> fresh;
-  fresh.reserve(arrivals->size());
-  for (Individual& arrival : *arrivals) {
-    const bool seen = std::any_of(known.begin(), known.end(),
-                                  [&arrival](const std::vector<double>* genes) { return *genes == arrival.genes; });
-    if (seen) continue;
-    fresh.push_back(std::move(arrival));
-    known.push_back(&fresh.back().genes);
-  }
-  *arrivals = std::move(fresh);
-}
-
 int EvolutionStrategy::immigrate(std::vector<Individual> arrivals) {
   const size_t n = space_.size();
   for (const Individual& arrival : arrivals) {
@@ -474,8 +458,6 @@ int EvolutionStrategy::immigrate(std::vector<Individual> arrivals) {
                                                           : initialMutability(k);
     }
   }
-  dropKnownGenes(&arrivals);
-  if (arrivals.empty()) return 0;
   evaluate(&arrivals);
   operator_counts_[static_cast<int>(Operator::kImmigrant)] += arrivals.size();
   int entered = 0;

@@ -109,10 +109,10 @@ class EvolutionStrategy {
   /// Island model: individuals from another island (genes and mutabilities in this space's
   /// order; their cost is the sender's and is not trusted). Each is reflected into the bounds,
   /// re-evaluated on this strategy's cost and takes the place of the worst individual when it is
-  /// better than it, so the elite never gives way to a worse one. An arrival whose genes equal
-  /// an individual's already here or an earlier arrival's (the same best sent by several
-  /// islands) is skipped: a copy would take a place without adding anything. Returns how many
-  /// entered.
+  /// better than it, so the elite never gives way to a worse one. Copies are let in: the same
+  /// best sent by several islands (or back to its own) takes several places, which raises its
+  /// share of the parents; skipping copies slowed the conditional objects' searches
+  /// (docs/bench/islands.md, "Copies among the immigrants"). Returns how many entered.
   /// Throws InputError when an individual's genes or mutabilities do not match the space.
   /// Ignored (returns 0) before the first step.
   int immigrate(std::vector<Individual> arrivals);
@@ -163,8 +163,6 @@ class EvolutionStrategy {
   void forEach(size_t count, const std::function<void(size_t)>& body);
   void select(std::vector<Individual>* children, const std::vector<Operator>& ops);
   void refineBest();
-  /// Removes the arrivals whose genes equal a population member's or an earlier arrival's.
-  void dropKnownGenes(std::vector<Individual>* arrivals) const;
   /// Index of the first individual of lowest cost.
   int lowestCostIndex() const;
   /// Puts `candidate` (evaluated) in the place of the worst individual when it costs less than
