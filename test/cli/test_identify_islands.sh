@@ -41,6 +41,7 @@ set -e
 [ "$code" -ne 0 ] && [ "$code" -ne 124 ] || fail "a dead island's run exited $code (124: it hung)"
 grep -q "^identify: error: island 1 (process [0-9]*) was killed by signal 9" "$tmp/dead.err" ||
   fail "no line naming the dead island: $(cat "$tmp/dead.err")"
+[ ! -e "$tmp/dead.yaml" ] || fail "a run whose island died wrote a model"
 grep -q "^identify: 3 islands of population 30 in this process (migration every 5 generations, 2 migrant(s) each, broadcast)" \
   "$tmp/one.log" || fail "no islands line at the start"
 grep -E -q "^islands: 3, [1-9][0-9]* migration\(s\), best island [0-2]; per island evaluations \(immigrants accepted\):( [0-9]+ \([0-9]+\)){3}$" \

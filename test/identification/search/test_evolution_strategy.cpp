@@ -249,7 +249,7 @@ TEST(EvolutionStrategy, ImmigrantsReplaceTheWorstOnlyWhenBetter) {
 
 // The same best broadcast by several islands arrives several times: each copy takes a place of
 // a worse individual (a deliberate choice: the copies raise the best's share of the parents,
-// docs/bench/islands.md), and is evaluated once per copy.
+// docs/benchmarks.md), and is evaluated once per copy.
 TEST(EvolutionStrategy, IdenticalImmigrantsEachTakeAPlace) {
   Fixture f;
   mme::EsOptions options;

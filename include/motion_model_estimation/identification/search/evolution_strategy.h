@@ -112,7 +112,7 @@ class EvolutionStrategy {
   /// better than it, so the elite never gives way to a worse one. Copies are let in: the same
   /// best sent by several islands (or back to its own) takes several places, which raises its
   /// share of the parents; skipping copies slowed the conditional objects' searches
-  /// (docs/bench/islands.md, "Copies among the immigrants"). Returns how many entered.
+  /// (docs/benchmarks.md, "Copies among the immigrants"). Returns how many entered.
   /// Throws InputError when an individual's genes or mutabilities do not match the space.
   /// Ignored (returns 0) before the first step.
   int immigrate(std::vector<Individual> arrivals);
