@@ -532,7 +532,7 @@ bool solveEquationError(const Problem& p, std::vector<double>* values, std::stri
 RunResult runMethod(const std::string& method, const Problem& problem, uint64_t seed,
                     const Budget& budget, bool keep_trace) {
   RunResult r;
-  if (method != "default" && method != "lls" && problem.cost->termCount() == 0) {
+  if (method != "default" && method != "islands" && method != "lls" && problem.cost->termCount() == 0) {
     // Occlusion left no (particle, frame) term of the one-step cost (each needs three frames of
     // a particle and two of its neighbours): the cost is zero everywhere, nothing to minimise.
     r.method = method;
