@@ -29,7 +29,7 @@
 namespace bench {
 
 std::vector<std::string> allMethods() {
-  return {"default", "es_local", "es_early", "es_lm", "es_global", "cmaes",
+  return {"default", "islands", "es_local", "es_early", "es_lm", "es_global", "cmaes",
           "sade",    "sade_final", "bobyqa", "lm",  "lls"};
 }
 
@@ -218,18 +218,20 @@ RunResult runEs(const Problem& p, uint64_t seed, const Budget& budget, bool keep
 }
 
 // ---------------------------------------------------------------- the default engine
-/// `identify` with no option: identifyModel(identifyOptionsFor(kDefault)) on the problem's
-/// model and data, one thread, the run's seed, its wall budget and its evaluation budget as
-/// generations of `offspring` children. Its own starts (the paper's initial distribution and the
-/// equation-error seeds); judged on the final answer, whatever the oracle stop says.
-RunResult runDefault(const Problem& p, uint64_t seed, const Budget& budget, bool keep_trace) {
+/// `identify` with no option but `--islands islands`: identifyModel(identifyOptionsFor(kDefault))
+/// on the problem's model and data, one thread, the run's seed, its wall budget and its
+/// evaluation budget as lock-step generations of `offspring` children per island. Its own starts
+/// (the paper's initial distribution and the equation-error seeds); judged on the final answer,
+/// whatever the oracle stop says.
+RunResult runDefault(const Problem& p, uint64_t seed, const Budget& budget, bool keep_trace, int islands) {
   RunResult r;
   mme::IdentifyOptions o = mme::identifyOptionsFor(mme::Preset::kDefault);
   o.es.seed = seed;
   o.es.threads = 1;
+  o.islands.islands = islands;  // the other island options: identify's defaults
   o.max_wall_time_s = budget.max_wall_s;
   o.generations = static_cast<int>(std::max<uint64_t>(
-      1, budget.max_evaluations / static_cast<uint64_t>(std::max(1, o.es.offspring))));
+      1, budget.max_evaluations / static_cast<uint64_t>(islands * std::max(1, o.es.offspring))));
   const auto start = Clock::now();
   // The best-so-far curve of the search (its best on the one-step cost after every generation),
   // then the final answer.
@@ -530,7 +532,7 @@ bool solveEquationError(const Problem& p, std::vector<double>* values, std::stri
 RunResult runMethod(const std::string& method, const Problem& problem, uint64_t seed,
                     const Budget& budget, bool keep_trace) {
   RunResult r;
-  if (method != "default" && method != "lls" && problem.cost->termCount() == 0) {
+  if (method != "default" && method != "islands" && method != "lls" && problem.cost->termCount() == 0) {
     // Occlusion left no (particle, frame) term of the one-step cost (each needs three frames of
     // a particle and two of its neighbours): the cost is zero everywhere, nothing to minimise.
     r.method = method;
@@ -540,7 +542,8 @@ RunResult runMethod(const std::string& method, const Problem& problem, uint64_t 
     r.errors.median = r.errors.max = std::numeric_limits<double>::quiet_NaN();
     return r;
   }
-  if (method == "default") r = runDefault(problem, seed, budget, keep_trace);
+  if (method == "default") r = runDefault(problem, seed, budget, keep_trace, 1);
+  else if (method == "islands") r = runDefault(problem, seed, budget, keep_trace, kIslands);
   else if (method == "es_local") r = runEs(problem, seed, budget, keep_trace, true, Schedule::kPaper);
   else if (method == "es_early")
     r = runEs(problem, seed, budget, keep_trace, true, Schedule::kEarlyBobyqa);

@@ -7,6 +7,9 @@
 //              seeds, threshold search, bound widening, convergence stop, automatic substeps,
 //              the output-error estimator when the markers' noise reaches 1e-7 m); it stops by
 //              itself, takes its own starts and is judged on its final answer (no oracle stop)
+//   islands    `default` with `--islands 3` (identify's island defaults: broadcast, 2 migrants
+//              every 10 generations), the same total evaluations (a third of the generations);
+//              judged like `default` on its final answer; run in the stability map only
 //   es_local   the paper's ES with local costs (mme::EvolutionStrategy, default options)
 //   es_early   the same engine with its refinement from generation 10, every 10 (the paper:
 //              from 400, every 100); run in the speed-accuracy part only
@@ -36,6 +39,8 @@ namespace bench {
 
 /// es_early's refinement schedule: first refinement and period [generations].
 constexpr int kEarlyRefineGeneration = 10;
+/// `islands`' island count.
+constexpr int kIslands = 3;
 /// es_lm's: first refinement and period [generations].
 constexpr int kLmRefineGeneration = 5;
 

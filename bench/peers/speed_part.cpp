@@ -119,7 +119,7 @@ void speedAccuracy(const Settings& s, const std::vector<std::string>& methods) {
           problem->lls_applicable ? "applies" : ("n/a: " + problem->lls_reason).c_str());
       for (int seed = 1; seed <= sc.seeds; ++seed)
         for (const std::string& m : methods) {
-          if (m == "sade_final") continue;  // the map's conditional axis only
+          if (m == "sade_final" || m == "islands") continue;  // map methods only
           jobs.push_back([&, problem, sc, seed, m, pass]() {
             const RunResult r = speedRun(m, *problem, sc, seed, pass == 0);
             std::lock_guard<std::mutex> lock(csv_mutex);

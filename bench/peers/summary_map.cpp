@@ -180,8 +180,8 @@ void mapSection(const SummaryData& d, const std::vector<std::string>& map_order,
   md << "## (b) Stability map: success rate (all parameters within 1 %)\n\nBase: paper_object, "
      << kMapFrames << " frames at 100 Hz, noise-free, fully visible, starts from the paper's initial "
         "distribution; each axis changes one thing. Budget per run: 45 000 evaluations or 20 s "
-        "(40 s from 100 unknowns); a run stops at success, except `default` (judged on its final "
-        "answer; it stops by itself) and `sade_final`. Cells: successes/runs. Chart: "
+        "(40 s from 100 unknowns); a run stops at success, except `default` and `islands` (judged "
+        "on their final answer; they stop by themselves) and `sade_final`. Cells: successes/runs. Chart: "
         "`stability_map.png`.\n\n";
   std::vector<std::string> axis_order = {"noise", "omega_h", "occlusion", "spread", "unknowns", "conditional"};
   const std::map<std::string, std::string> axis_doc = {

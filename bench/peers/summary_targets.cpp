@@ -112,7 +112,8 @@ std::pair<int, int> countRuns(const std::vector<Row>& st, const std::string& axi
   return runs_ok;
 }
 
-/// The cells `default` ran in and the peers the map ran (sade_final left out).
+/// The cells `default` ran in and the peers the map ran (sade_final and the package's own
+/// islands left out).
 void defaultCells(const std::vector<Row>& st, Cells* cells_out, std::vector<std::string>* peers_out) {
   Cells& cells = *cells_out;
   std::vector<std::string>& peers = *peers_out;
@@ -120,7 +121,7 @@ void defaultCells(const std::vector<Row>& st, Cells* cells_out, std::vector<std:
     if (r.at("method") == "default" &&
         std::find(cells.begin(), cells.end(), std::make_pair(r.at("axis"), r.at("value"))) == cells.end())
       cells.emplace_back(r.at("axis"), r.at("value"));
-    if (r.at("method") != "default" && r.at("method") != "sade_final" &&
+    if (r.at("method") != "default" && r.at("method") != "sade_final" && r.at("method") != "islands" &&
         std::find(peers.begin(), peers.end(), r.at("method")) == peers.end())
       peers.push_back(r.at("method"));
   }

@@ -424,7 +424,7 @@ class Identification {
     island_evaluations_.resize(n, 0);
     island_accepted_.resize(n, 0);
     for (size_t i = 0; i < n; ++i) {
-      island_evaluations_[i] += es_->island(static_cast<int>(i)).evaluations();
+      island_evaluations_[i] += es_->islandEvaluations(static_cast<int>(i));
       island_accepted_[i] += es_->immigrantsAccepted(static_cast<int>(i));
     }
     migrations_ += es_->migrations();

@@ -134,26 +134,13 @@ motion_model_estimation::Migrants toMigrantsMsg(const MigrantBatch& batch, const
 
 std::string fromMigrantsMsg(const motion_model_estimation::Migrants& msg, MigrantBatch* batch) {
   *batch = MigrantBatch();
-  const size_t n = msg.parameter_names.size(), count = msg.migrant_count;
-  if (msg.costs.size() != count || msg.genes.size() != count * n || msg.mutabilities.size() != count * n)
-    return "migrant_count " + std::to_string(count) + " and " + std::to_string(n) +
-           " parameter names need " + std::to_string(count * n) + " genes and mutabilities and " +
-           std::to_string(count) + " costs; the message has " + std::to_string(msg.genes.size()) +
-           ", " + std::to_string(msg.mutabilities.size()) + " and " + std::to_string(msg.costs.size());
   batch->island_id = msg.island_id;
   batch->seed = msg.seed;
   batch->generation = msg.generation;
   batch->parameter_names = msg.parameter_names;
   batch->window_start_time_s = msg.window_start.toSec();
   batch->window_end_time_s = msg.window_end.toSec();
-  batch->individuals.resize(count);
-  for (size_t i = 0; i < count; ++i) {
-    Individual& ind = batch->individuals[i];
-    ind.genes.assign(msg.genes.begin() + i * n, msg.genes.begin() + (i + 1) * n);
-    ind.mutability.assign(msg.mutabilities.begin() + i * n, msg.mutabilities.begin() + (i + 1) * n);
-    ind.cost = msg.costs[i];
-  }
-  return "";
+  return unflattenMigrants(msg.migrant_count, msg.genes, msg.mutabilities, msg.costs, batch);
 }
 
 }  // namespace mme

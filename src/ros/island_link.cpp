@@ -56,7 +56,9 @@ void IslandLink::onMigrants(const motion_model_estimation::Migrants::ConstPtr& m
   }
   MigrantBatch batch;
   std::string why = fromMigrantsMsg(*msg, &batch);
-  if (why.empty()) why = estimator_->receiveMigrants(std::move(batch));
+  // A message that cannot be read is refused and counted like migrants of another model.
+  why = why.empty() ? estimator_->receiveMigrants(std::move(batch))
+                    : estimator_->refuseMigrants(msg->migrant_count, why);
   if (!why.empty())
     ROS_WARN_THROTTLE(10.0, "estimator_node: migrants of island '%s' refused: %s",
                       msg->island_id.c_str(), why.c_str());

@@ -53,6 +53,9 @@ inline CliSpec identifyCliSpec() {
         {"islands", "N", "1",
          "Island model: N populations of --population each, own seeds, stepping in lock-step in "
          "this process (threads, deterministic); the best island's best is the answer."},
+        {"island-processes", "", "",
+         "With --islands N: each island in a child process of its own (this host), migrants "
+         "passed through this process; the same result as threads, bit for bit."},
         {"migration-period", "G", "10", "Islands: generations between migrations."},
         {"migrants", "K", "2", "Islands: best individuals each island sends to every other island per migration."}}},
       {"Cost and refinement",

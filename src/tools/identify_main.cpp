@@ -70,8 +70,10 @@ void parseSearchOptions(const mme::CliArgs& args, Command* c) {
   options.es.seed = static_cast<uint64_t>(args.getInt("seed", 1, 0, 0x7fffffffL));
   options.es.threads = static_cast<int>(args.getInt("threads", 1, 1, 256));
   options.islands.islands = static_cast<int>(args.getInt("islands", 1, 1, 1024));
-  if (options.islands.islands == 1 && (args.has("migration-period") || args.has("migrants")))
-    throw mme::InputError("--migration-period and --migrants need --islands N with N >= 2");
+  if (options.islands.islands == 1 &&
+      (args.has("migration-period") || args.has("migrants") || args.has("island-processes")))
+    throw mme::InputError("--migration-period, --migrants and --island-processes need --islands N with N >= 2");
+  options.islands.processes = args.has("island-processes");
   options.islands.migration_period_generations = static_cast<int>(
       args.getInt("migration-period", options.islands.migration_period_generations, 1, 100000000));
   options.islands.migrants = static_cast<int>(
@@ -423,9 +425,11 @@ void connectOutput(Command* c, Heartbeat* heartbeat) {
                 mme::refineAlgorithmName(o.es.refine_algorithm), o.es.refine_start_generation,
                 o.es.refine_period);
     if (o.islands.islands > 1)
-      std::printf("identify: %d islands of population %d in this process (migration every %d "
+      std::printf("identify: %d islands of population %d %s (migration every %d "
                   "generations, %d migrant(s) each, %s)\n",
-                  o.islands.islands, o.es.population, o.islands.migration_period_generations,
+                  o.islands.islands, o.es.population,
+                  o.islands.processes ? "in processes of their own" : "in this process",
+                  o.islands.migration_period_generations,
                   o.islands.migrants, mme::migrationTopologyName(o.islands.topology));
     heartbeat->printed("the passive identification");
   };

@@ -51,7 +51,8 @@ motion_model_estimation::ModelEstimate toModelEstimateMsg(const Estimate& estima
 /// migrant by migrant), stamped `stamp` (the send time).
 motion_model_estimation::Migrants toMigrantsMsg(const MigrantBatch& batch, const ros::Time& stamp);
 /// A Migrants message as a batch. Returns "" or, when the arrays' lengths do not agree with
-/// migrant_count and the parameter names, why the message is refused (the batch is then empty).
+/// migrant_count and the parameter names, why the message is refused (unflattenMigrants: the
+/// batch then holds no individuals).
 std::string fromMigrantsMsg(const motion_model_estimation::Migrants& msg, MigrantBatch* batch);
 
 }  // namespace mme

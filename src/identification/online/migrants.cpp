@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace mme {
 
@@ -19,6 +20,31 @@ std::string parameterMismatch(const std::vector<std::string>& ours,
   if (theirs.size() > ours.size())
     return "the migrants have " + std::to_string(theirs.size()) + " parameters, this island " +
            std::to_string(ours.size()) + ": '" + theirs[common] + "' is not searched here";
+  return "";
+}
+
+std::string unflattenMigrants(uint64_t count, const std::vector<double>& genes,
+                              const std::vector<double>& mutabilities, const std::vector<double>& costs,
+                              MigrantBatch* batch) {
+  batch->individuals.clear();
+  const uint64_t n = batch->parameter_names.size();
+  // count * n compared by division: a wild count must not wrap around.
+  const bool rows_match = n == 0 ? genes.empty() && mutabilities.empty()
+                                 : genes.size() % n == 0 && genes.size() / n == count &&
+                                       mutabilities.size() == genes.size();
+  if (costs.size() != count || !rows_match)
+    return "migrant_count " + std::to_string(count) + " and " + std::to_string(n) +
+           " parameter names need " + (n == 0 || count <= UINT64_MAX / n ? std::to_string(count * n) : "too many") +
+           " genes and mutabilities and " + std::to_string(count) + " costs; the message has " +
+           std::to_string(genes.size()) + ", " + std::to_string(mutabilities.size()) + " and " +
+           std::to_string(costs.size());
+  batch->individuals.resize(count);
+  for (size_t i = 0; i < count; ++i) {
+    Individual& ind = batch->individuals[i];
+    ind.genes.assign(genes.begin() + i * n, genes.begin() + (i + 1) * n);
+    ind.mutability.assign(mutabilities.begin() + i * n, mutabilities.begin() + (i + 1) * n);
+    ind.cost = costs[i];
+  }
   return "";
 }
 

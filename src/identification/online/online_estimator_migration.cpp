@@ -47,6 +47,12 @@ std::string OnlineEstimator::receiveMigrants(MigrantBatch batch) {
   return "";
 }
 
+std::string OnlineEstimator::refuseMigrants(uint64_t individuals, const std::string& why) {
+  std::lock_guard<std::mutex> lock(migrants_mutex_);
+  migration_.refused += individuals;
+  return why;
+}
+
 MigrationCounters OnlineEstimator::migrationCounters() const {
   std::lock_guard<std::mutex> lock(migrants_mutex_);
   return migration_;

@@ -49,7 +49,8 @@ IslandModel::IslandModel(const ParameterSpace& space, const EsOptions& es, const
   if (n > 1) {
     const int stepping = std::min(n, std::max(1, es.threads));
     each.threads = std::max(1, es.threads / n);
-    if (stepping > 1) pool_ = std::make_unique<ThreadPool>(stepping);
+    // Processes step side by side by themselves; a pool's threads would not survive a fork.
+    if (stepping > 1 && !islands.processes) pool_ = std::make_unique<ThreadPool>(stepping);
   }
   for (int i = 0; i < n; ++i) {
     each.seed = islandSeed(es.seed, i);
@@ -83,7 +84,12 @@ void IslandModel::forEachIsland(const std::function<void(size_t)>& body) {
 }
 
 void IslandModel::step() {
-  forEachIsland([this](size_t i) { islands_[i]->step(); });
+  if (options_.processes && islands_.size() > 1) {
+    if (!processes_) processes_ = std::make_unique<IslandProcesses>(islands_);
+    reports_ = processes_->step();
+  } else {
+    forEachIsland([this](size_t i) { islands_[i]->step(); });
+  }
   if (islands_.size() > 1 && options_.migrants > 0 &&
       generation() % options_.migration_period_generations == 0)
     migrate();
@@ -94,39 +100,79 @@ void IslandModel::migrate() {
   // not depend on the order in which the others receive.
   const size_t n = islands_.size();
   std::vector<std::vector<Individual>> sent(n);
-  for (size_t i = 0; i < n; ++i) sent[i] = islands_[i]->emigrants(options_.migrants);
-  std::vector<int> entered(n, 0);
-  forEachIsland([&](size_t i) {
-    std::vector<Individual> arrivals;
+  if (processes_) {
+    sent = processes_->emigrants(options_.migrants);
+  } else {
+    for (size_t i = 0; i < n; ++i) sent[i] = islands_[i]->emigrants(options_.migrants);
+  }
+  std::vector<std::vector<Individual>> arrivals(n);
+  for (size_t i = 0; i < n; ++i) {
     if (options_.topology == MigrationTopology::kRing) {
-      arrivals = sent[(i + n - 1) % n];
+      arrivals[i] = sent[(i + n - 1) % n];
     } else {
       for (size_t j = 0; j < n; ++j)
-        if (j != i) arrivals.insert(arrivals.end(), sent[j].begin(), sent[j].end());
+        if (j != i) arrivals[i].insert(arrivals[i].end(), sent[j].begin(), sent[j].end());
     }
-    entered[i] = islands_[i]->immigrate(std::move(arrivals));
-  });
+  }
+  std::vector<int> entered(n, 0);
+  if (processes_) {
+    entered = processes_->immigrate(arrivals, &reports_);
+  } else {
+    forEachIsland([&](size_t i) { entered[i] = islands_[i]->immigrate(std::move(arrivals[i])); });
+  }
   for (size_t i = 0; i < n; ++i) accepted_[i] += static_cast<uint64_t>(entered[i]);
   ++migrations_;
+}
+
+const EvolutionStrategy& IslandModel::island(int i) const {
+  if (processes_) throw std::logic_error("IslandModel::island: the islands are processes");
+  return *islands_[static_cast<size_t>(i)];
+}
+
+EvolutionStrategy& IslandModel::island(int i) {
+  if (processes_) throw std::logic_error("IslandModel::island: the islands are processes");
+  return *islands_[static_cast<size_t>(i)];
+}
+
+const Individual& IslandModel::islandBest(int i) const {
+  return processes_ ? reports_[static_cast<size_t>(i)].best : island(i).best();
 }
 
 int IslandModel::bestIsland() const {
   int best = 0;
   for (int i = 1; i < islandCount(); ++i)
-    if (island(i).best().cost < island(best).best().cost) best = i;
+    if (islandBest(i).cost < islandBest(best).cost) best = i;
   return best;
+}
+
+std::vector<double> IslandModel::bestValues() const {
+  return islands_.front()->space().toPhysical(best().genes);
+}
+
+int IslandModel::generation() const {
+  return processes_ ? reports_.front().generation : islands_.front()->generation();
+}
+
+uint64_t IslandModel::islandEvaluations(int i) const {
+  return processes_ ? reports_[static_cast<size_t>(i)].evaluations : island(i).evaluations();
 }
 
 uint64_t IslandModel::evaluations() const {
   uint64_t total = 0;
-  for (const auto& island : islands_) total += island->evaluations();
+  for (int i = 0; i < islandCount(); ++i) total += islandEvaluations(i);
   return total;
 }
 
 int IslandModel::refinements() const {
   int total = 0;
-  for (const auto& island : islands_) total += island->refinements();
+  for (int i = 0; i < islandCount(); ++i)
+    total += processes_ ? reports_[static_cast<size_t>(i)].refinements : island(i).refinements();
   return total;
+}
+
+RefineStatus IslandModel::lastRefineStatus() const {
+  const int i = bestIsland();
+  return processes_ ? reports_[static_cast<size_t>(i)].last_refine_status : island(i).lastRefineStatus();
 }
 
 }  // namespace mme

@@ -150,3 +150,38 @@ TEST(Migrants, TheQueueIsBoundedAndDropsTheOldest) {
 }
 
 }  // namespace
+
+namespace {
+
+// A message's flat arrays become the batch's individuals when their lengths match the counts;
+// otherwise the reason names the counts and nothing is read, and the receiver counts the
+// announced migrants as refused (malformed messages join the refused count, not only a warning).
+TEST(Migrants, MalformedArraysAreRefusedAndCounted) {
+  mme::MigrantBatch batch;
+  batch.parameter_names = {"s01/stiffness", "s01/rest_length"};
+  const std::vector<double> genes{1.0, -2.0, 3.0, -4.0}, mutabilities{0.1, 0.2, 0.3, 0.4}, costs{1e-6, 2e-6};
+  ASSERT_EQ(mme::unflattenMigrants(2, genes, mutabilities, costs, &batch), "");
+  ASSERT_EQ(batch.individuals.size(), 2u);
+  EXPECT_EQ(batch.individuals[1].genes, (std::vector<double>{3.0, -4.0}));
+  EXPECT_EQ(batch.individuals[1].mutability, (std::vector<double>{0.3, 0.4}));
+  EXPECT_EQ(batch.individuals[1].cost, 2e-6);
+
+  const std::vector<double> short_genes{1.0, -2.0, 3.0};
+  std::string why = mme::unflattenMigrants(2, short_genes, mutabilities, costs, &batch);
+  EXPECT_NE(why.find("need 4 genes"), std::string::npos) << why;
+  EXPECT_TRUE(batch.individuals.empty());
+  why = mme::unflattenMigrants(3, genes, mutabilities, costs, &batch);  // more announced than sent
+  EXPECT_NE(why.find("migrant_count 3"), std::string::npos) << why;
+  why = mme::unflattenMigrants(0xffffffffu, genes, mutabilities, costs, &batch);  // a wild count
+  EXPECT_FALSE(why.empty());
+  EXPECT_TRUE(batch.individuals.empty());
+
+  Islands f;
+  mme::OnlineEstimator island(f.search, f.options(2));
+  EXPECT_EQ(island.refuseMigrants(3, why), why);
+  const mme::MigrationCounters c = island.migrationCounters();
+  EXPECT_EQ(c.refused, 3u);
+  EXPECT_EQ(c.received, 0u);
+}
+
+}  // namespace

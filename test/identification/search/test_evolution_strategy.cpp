@@ -247,6 +247,34 @@ TEST(EvolutionStrategy, ImmigrantsReplaceTheWorstOnlyWhenBetter) {
   EXPECT_THROW(weak.immigrate(wrong), mme::InputError);
 }
 
+// The same best broadcast by several islands arrives several times: each copy takes a place of
+// a worse individual (a deliberate choice: the copies raise the best's share of the parents,
+// docs/benchmarks.md), and is evaluated once per copy.
+TEST(EvolutionStrategy, IdenticalImmigrantsEachTakeAPlace) {
+  Fixture f;
+  mme::EsOptions options;
+  options.population = 20;
+  options.offspring = 20;
+  options.refine_period = 0;
+  mme::EvolutionStrategy strong(mme::ParameterSpace(f.search, f.data), options);
+  strong.setCost(f.cost);
+  for (int g = 0; g < 40; ++g) strong.step();
+  options.seed = 7;
+  mme::EvolutionStrategy weak(mme::ParameterSpace(f.search, f.data), options);
+  weak.setCost(f.cost);
+  weak.step();
+  ASSERT_LT(strong.best().cost, weak.best().cost);
+
+  const mme::Individual best = strong.emigrants(1).at(0);
+  const uint64_t evaluations_before = weak.evaluations();
+  EXPECT_EQ(weak.immigrate({best, best, best}), 3);
+  const auto copies = std::count_if(weak.population().begin(), weak.population().end(),
+                                    [&best](const mme::Individual& ind) { return ind.genes == best.genes; });
+  EXPECT_EQ(copies, 3);
+  EXPECT_EQ(weak.evaluations() - evaluations_before, 3u);
+  EXPECT_EQ(weak.best().genes, best.genes);
+}
+
 // The engine with the Levenberg-Marquardt refinement from generation 5 identifies the small
 // object in 10 generations; the algorithm is parsed by name.
 TEST(EvolutionStrategy, LevenbergMarquardtRefinementIdentifiesTheSmallObjectEarly) {

@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
 #include <memory>
 #include <string>
 #include <vector>
@@ -193,6 +195,62 @@ struct CableScene {
   mme::Model truth, search;
   mme::Trajectory data;
 };
+
+// Islands as child processes (identify --island-processes) give the threaded islands' answer
+// bit for bit on a conditional scene (5 cable types: thresholds, several basins), with the same
+// evaluations, migrations and immigrants per island.
+TEST(IslandModel, ProcessesGiveTheThreadsResultBitForBit) {
+  const CableScene scene(5, 4003);
+  mme::IdentifyOptions o = mme::identifyOptionsFor(mme::Preset::kDefault);
+  o.es.seed = 3;
+  o.estimate_std = false;
+  o.generations = 30;
+  o.patience_generations = 0;  // every generation runs: six migrations
+  o.es.population = o.es.offspring = 40;
+  o.islands.islands = 3;
+  o.islands.migration_period_generations = 5;
+  const mme::IdentifyResult threads = mme::identifyModel(scene.search, scene.data, o);
+  o.islands.processes = true;
+  const mme::IdentifyResult processes = mme::identifyModel(scene.search, scene.data, o);
+  EXPECT_EQ(threads.values, processes.values);
+  EXPECT_EQ(threads.global_cost, processes.global_cost);
+  EXPECT_EQ(threads.evaluations, processes.evaluations);
+  EXPECT_EQ(threads.generations, processes.generations);
+  EXPECT_EQ(threads.island_evaluations, processes.island_evaluations);
+  EXPECT_EQ(threads.island_immigrants_accepted, processes.island_immigrants_accepted);
+  EXPECT_EQ(threads.migrations, processes.migrations);
+  EXPECT_EQ(threads.best_island, processes.best_island);
+  EXPECT_GE(processes.migrations, 5);
+  uint64_t accepted = 0;
+  for (uint64_t a : processes.island_immigrants_accepted) accepted += a;
+  EXPECT_GT(accepted, 0u);
+}
+
+// An island's process that dies mid-run (the test hook makes island 1 kill itself at its second
+// generation) ends the run with an error naming the island and how it ended, never a hang; the
+// other processes are reaped.
+TEST(IslandModel, AnIslandProcessThatDiesEndsTheRunNamingIt) {
+  Fixture f;
+  const mme::ParameterSpace space(f.search, f.data);
+  mme::IslandOptions io;
+  io.islands = 3;
+  io.processes = true;
+  ::setenv(mme::IslandProcesses::kTestDieVariable, "1", 1);
+  std::string message;
+  {
+    mme::IslandModel islands(space, smallEs(), io);
+    islands.setCost(f.cost);
+    islands.step();  // the processes start, every island steps once
+    try {
+      islands.step();
+    } catch (const std::runtime_error& e) {
+      message = e.what();
+    }
+  }  // the surviving processes are stopped here
+  ::unsetenv(mme::IslandProcesses::kTestDieVariable);
+  EXPECT_NE(message.find("island 1 "), std::string::npos) << message;
+  EXPECT_NE(message.find("killed by signal 9"), std::string::npos) << message;
+}
 
 // Several local minima (one per wrong threshold interval of 10 cable types): `identify --islands
 // 3` (three populations of 100, broadcast migration) against one population of 300 (the same

@@ -39,6 +39,14 @@ struct MigrationCounters {
 std::string parameterMismatch(const std::vector<std::string>& ours,
                               const std::vector<std::string>& theirs);
 
+/// A message's flat arrays (msg/Migrants.msg: migrant i's parameter k at [i * n + k], n =
+/// batch->parameter_names.size()) as batch->individuals. "" when the arrays hold `count`
+/// migrants exactly (count x n genes and mutabilities, count costs), else why not, and
+/// batch->individuals is left empty.
+std::string unflattenMigrants(uint64_t count, const std::vector<double>& genes,
+                              const std::vector<double>& mutabilities, const std::vector<double>& costs,
+                              MigrantBatch* batch);
+
 /// "" when every individual of `batch` has as many finite genes and mutabilities as the batch
 /// has parameter names, else why not.
 std::string malformedBatch(const MigrantBatch& batch);

@@ -151,6 +151,10 @@ class OnlineEstimator {
   /// parameters differ by name or order, parameterMismatch; or the batch is malformed), and
   /// nothing changes but the refused count.
   std::string receiveMigrants(MigrantBatch batch);
+  /// Island model: migrants the transport could not read (e.g. a message whose arrays do not
+  /// match its counts, unflattenMigrants): `individuals` (as many as the sender announced) are
+  /// counted as refused; returns `why`.
+  std::string refuseMigrants(uint64_t individuals, const std::string& why);
   MigrationCounters migrationCounters() const;
   /// Forgets the population (and the window when `clear_window`).
   void reset(bool clear_window);

@@ -109,7 +109,10 @@ class EvolutionStrategy {
   /// Island model: individuals from another island (genes and mutabilities in this space's
   /// order; their cost is the sender's and is not trusted). Each is reflected into the bounds,
   /// re-evaluated on this strategy's cost and takes the place of the worst individual when it is
-  /// better than it, so the elite never gives way to a worse one. Returns how many entered.
+  /// better than it, so the elite never gives way to a worse one. Copies are let in: the same
+  /// best sent by several islands (or back to its own) takes several places, which raises its
+  /// share of the parents; skipping copies slowed the conditional objects' searches
+  /// (docs/benchmarks.md, "Copies among the immigrants"). Returns how many entered.
   /// Throws InputError when an individual's genes or mutabilities do not match the space.
   /// Ignored (returns 0) before the first step.
   int immigrate(std::vector<Individual> arrivals);

@@ -3,7 +3,8 @@
 // (emigrants) to other islands, which let them compete for the places of their worst. Separate
 // populations settle in different basins (e.g. different threshold intervals of conditional
 // bonds) and migration spreads the best basin's individuals. Offline islands are threads of one
-// process; islands on several hosts are the online node's.
+// process or, with IslandOptions::processes, processes of one host (island_processes.h), with
+// the same result; islands on several hosts are the online node's (ROS).
 #pragma once
 
 #include <atomic>
@@ -17,6 +18,7 @@
 #include "motion_model_estimation/core/cost.h"
 #include "motion_model_estimation/core/thread_pool.h"
 #include "motion_model_estimation/identification/search/evolution_strategy.h"
+#include "motion_model_estimation/identification/search/island_processes.h"
 #include "motion_model_estimation/identification/search/parameter_space.h"
 
 namespace mme {
@@ -38,6 +40,9 @@ struct IslandOptions {
   /// truth's intervals at least as often as the ring, and with a few islands the receivers
   /// re-evaluate only a few migrants. The online islands (one topic) broadcast too.
   MigrationTopology topology = MigrationTopology::kBroadcast;
+  /// Each island in a child process of its own instead of a thread (islands >= 2): the same
+  /// result bit for bit; a process that dies ends the run with an error naming its island.
+  bool processes = false;
 };
 
 /// Empty string when the options are usable, else the reason naming the option.
@@ -62,25 +67,30 @@ class IslandModel {
   void setCancel(const std::atomic<bool>* cancel);
 
   /// One generation on every island (its refinement included when due), then, every
-  /// migration_period_generations, a migration at the barrier in island order.
+  /// migration_period_generations, a migration at the barrier in island order. With processes,
+  /// the first call starts them; throws std::runtime_error naming an island whose process died.
   void step();
 
   int islandCount() const { return static_cast<int>(islands_.size()); }
-  const EvolutionStrategy& island(int i) const { return *islands_[static_cast<size_t>(i)]; }
+  /// One island's strategy (threads only: with processes it lives in the child, and this throws
+  /// std::logic_error once they have started).
+  const EvolutionStrategy& island(int i) const;
   /// One island, e.g. to offer it an individual found elsewhere (EvolutionStrategy::offer).
-  EvolutionStrategy& island(int i) { return *islands_[static_cast<size_t>(i)]; }
+  EvolutionStrategy& island(int i);
   /// The island holding the best individual (the lowest index among equal costs).
   int bestIsland() const;
-  const Individual& best() const { return island(bestIsland()).best(); }
-  std::vector<double> bestValues() const { return island(bestIsland()).bestValues(); }
+  const Individual& best() const { return islandBest(bestIsland()); }
+  std::vector<double> bestValues() const;
   /// Generations of each island (lock-step: all the same).
-  int generation() const { return islands_.front()->generation(); }
+  int generation() const;
   /// Cost evaluations of all islands, the immigrants' re-evaluations included.
   uint64_t evaluations() const;
+  /// Cost evaluations of island i.
+  uint64_t islandEvaluations(int i) const;
   /// Refinements run by all islands.
   int refinements() const;
   /// How the best island's last refinement ended.
-  RefineStatus lastRefineStatus() const { return island(bestIsland()).lastRefineStatus(); }
+  RefineStatus lastRefineStatus() const;
   /// Migrations done (each moves every island's emigrants once).
   int migrations() const { return migrations_; }
   /// Immigrants island i let into its population so far.
@@ -88,12 +98,18 @@ class IslandModel {
 
  private:
   void migrate();
+  /// Island i's best individual (from its last report when it is a process).
+  const Individual& islandBest(int i) const;
   /// Calls body(i) for every island, on the island pool when there is one.
   void forEachIsland(const std::function<void(size_t)>& body);
 
   IslandOptions options_;
   std::vector<std::unique_ptr<EvolutionStrategy>> islands_;
   std::unique_ptr<ThreadPool> pool_;  ///< steps islands side by side (null: one at a time)
+  /// The islands' processes (options_.processes, started by the first step), and what each
+  /// reported last; the strategies in islands_ are then only the children's starting points.
+  std::unique_ptr<IslandProcesses> processes_;
+  std::vector<IslandReport> reports_;
   std::vector<uint64_t> accepted_;
   int migrations_ = 0;
 };
