@@ -102,6 +102,7 @@ void fitSensorMuscleStep(const Trajectory& trajectory, const PipelineOptions& op
   // with a warning, rather than the run being lost.
   SensorMuscleOptions sensor_options = *options.sensor_muscles;
   if (!sensor_options.progress) sensor_options.progress = options.say;
+  sensor_options.threads = std::max(sensor_options.threads, options.identify.es.threads);
   try {
     result->sensor_muscles = addSensorMuscles(result->identified.model, trajectory, sensor_options);
   } catch (const InputError& e) {
