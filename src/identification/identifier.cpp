@@ -121,7 +121,7 @@ constexpr double kStarvedShare = 0.5;
 /// A one-step residual this many times what white marker noise alone gives (sqrt(6) sigma per
 /// coordinate) is a model that does not explain the motion: the output error may be deferred
 /// (IdentifyOptions::defer_output_error_on_misfit). A passive scene's residual sits near 1x.
-constexpr double kDeferMisfitFactor = 5.0;
+constexpr double kDeferMisfitFactor = 2.0;
 
 std::string formatValue(double v) {
   char text[32];

@@ -67,7 +67,7 @@ struct IdentifyOptions {
   /// A smooth parameter that ends within 1 % of a default (not user-given) bound: the bound is
   /// widened tenfold and the search resumed from the answer, at most this many times.
   int max_bound_widenings = 3;
-  /// kAuto only: when the search's answer leaves one-step residuals far above what the markers'
+  /// kAuto only: when the search's answer leaves one-step residuals over 2x what the markers'
   /// noise gives (the passive model does not explain the motion, as on a walk), the output
   /// error is not run but left to the caller (IdentifyResult::output_error_deferred;
   /// runDeferredOutputError), which runs it only when a later step (the sensor muscles) does

@@ -36,8 +36,8 @@ struct PipelineOptions {
   /// predict the held-out frames better than the passive model.
   std::optional<SensorMuscleOptions> sensor_muscles;
   /// With sensor muscles: the passive identification defers an output error that cannot pay
-  /// off (IdentifyOptions::defer_output_error_on_misfit: one-step residuals far above the
-  /// markers' noise), and the pipeline runs it after the muscles only when they are not kept
+  /// off (IdentifyOptions::defer_output_error_on_misfit: one-step residuals over 2x what the
+  /// markers' noise gives), and the pipeline runs it after the muscles only when they are not kept
   /// (runDeferredOutputError). false: it runs before the muscles as identifyModel decides.
   bool output_error_after_muscles = true;
   /// One line per step for a person (the structure's levels, the muscles' steps); may be empty.
