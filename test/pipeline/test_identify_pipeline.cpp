@@ -184,6 +184,11 @@ bool anyNote(const std::vector<std::string>& notes, const std::string& text) {
   return false;
 }
 
+/// The output error ran: its judge's figures or a fit that was no answer.
+bool outputErrorRan(const std::vector<std::string>& notes) {
+  return anyNote(notes, "judged 10 frames ahead on the fitted frames") || anyNote(notes, "the output-error fit");
+}
+
 // With sensor muscles and a passive model that misses the motion, the output error waits for
 // the muscles: kept, it never runs (the file's passive part is the search's answer); not kept
 // (here: a layout too large to fit), it runs after them and is judged as it would have been.
@@ -195,7 +200,7 @@ TEST(IdentifyPipeline, TheOutputErrorRunsAfterTheMusclesOnlyWhenTheyAreNotKept) 
   EXPECT_TRUE(kept.identified.output_error_deferred);
   EXPECT_EQ(kept.identified.estimator, mme::Estimator::kShortTerm);
   EXPECT_TRUE(anyNote(kept.notes, "the output error is deferred"));
-  EXPECT_FALSE(anyNote(kept.notes, "judged 10 frames ahead on the fitted frames"));
+  EXPECT_FALSE(outputErrorRan(kept.notes));
   EXPECT_GT(mme::muscleTypeCount(kept.model), 0);
 
   mme::PipelineOptions too_large = withSensorMuscles();
@@ -206,7 +211,7 @@ TEST(IdentifyPipeline, TheOutputErrorRunsAfterTheMusclesOnlyWhenTheyAreNotKept) 
   EXPECT_FALSE(not_kept.sensor_muscles.has_value());
   EXPECT_FALSE(not_kept.identified.output_error_deferred);
   EXPECT_TRUE(anyNote(not_kept.notes, "the output error is deferred"));
-  EXPECT_TRUE(anyNote(not_kept.notes, "judged 10 frames ahead on the fitted frames"));
+  EXPECT_TRUE(outputErrorRan(not_kept.notes));
   EXPECT_TRUE(anyNote(said, "the deferred output error runs"));
   EXPECT_EQ(mme::muscleTypeCount(not_kept.model), 0);
   EXPECT_EQ(mme::getValues(not_kept.model, not_kept.identified.parameters), not_kept.identified.values);
@@ -217,7 +222,7 @@ TEST(IdentifyPipeline, TheOutputErrorRunsAfterTheMusclesOnlyWhenTheyAreNotKept) 
   const mme::PipelineResult first = mme::runPipeline(c.passive, c.data, before);
   EXPECT_FALSE(first.identified.output_error_deferred);
   EXPECT_FALSE(anyNote(first.notes, "the output error is deferred"));
-  EXPECT_TRUE(anyNote(first.notes, "judged 10 frames ahead on the fitted frames"));
+  EXPECT_TRUE(outputErrorRan(first.notes));
   EXPECT_TRUE(first.sensor_muscles.has_value());
 }
 
