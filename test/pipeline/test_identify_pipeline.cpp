@@ -175,6 +175,7 @@ mme::PipelineOptions withSensorMuscles() {
   sm.neighbours = 3;
   sm.anchors_by_validation = false;
   o.sensor_muscles = sm;
+  o.output_error_after_muscles = true;
   return o;
 }
 
@@ -236,6 +237,7 @@ TEST(IdentifyPipeline, APassiveSceneAtTheNoiseStillGetsTheOutputErrorFirst) {
   o.identify.estimate_std = false;
   const mme::PipelineResult plain = mme::runPipeline(mme::test::withoutValues(truth), data, o);
   o.sensor_muscles = mme::SensorMuscleOptions();
+  o.output_error_after_muscles = true;
   const mme::PipelineResult with = mme::runPipeline(mme::test::withoutValues(truth), data, o);
   EXPECT_FALSE(with.identified.output_error_deferred);
   EXPECT_FALSE(anyNote(with.notes, "deferred"));

@@ -39,7 +39,10 @@ struct PipelineOptions {
   /// off (IdentifyOptions::defer_output_error_on_misfit: one-step residuals over 2x what the
   /// markers' noise gives), and the pipeline runs it after the muscles only when they are not kept
   /// (runDeferredOutputError). false: it runs before the muscles as identifyModel decides.
-  bool output_error_after_muscles = true;
+  /// Off by default: where the output error's answer is adopted, the muscles fitted on it can
+  /// predict the held-out frames better than those fitted on the one-step answer
+  /// (docs/real_recordings.md, *The output error deferred*).
+  bool output_error_after_muscles = false;
   /// One line per step for a person (the structure's levels, the muscles' steps); may be empty.
   std::function<void(const std::string&)> say;
   /// Something the user should know that does not stop the run (e.g. muscles not kept); may be
