@@ -116,6 +116,10 @@ constexpr double kExactFitRms_m = 1e-9;
 constexpr double kPatienceShare = 1e-4;
 /// The one-step cost is starved when its terms are fewer than this share of the observed samples.
 constexpr double kStarvedShare = 0.5;
+/// A one-step residual this many times what white marker noise alone gives (sqrt(6) sigma per
+/// coordinate) is a model that does not explain the motion: the output error may be deferred
+/// (IdentifyOptions::defer_output_error_on_misfit). A passive scene's residual sits near 1x.
+constexpr double kDeferMisfitFactor = 2.0;
 
 std::string formatValue(double v) {
   char text[32];
@@ -248,9 +252,11 @@ namespace {
 /// result with its flags and uncertainties.
 class Identification {
  public:
+  /// `search` false: no evolution strategy, the first seed (the model's values) is the answer
+  /// the output error starts from (runDeferredOutputError).
   Identification(const Model& model, const Trajectory& trajectory, const IdentifyOptions& options,
-                 const std::function<void(const Progress&)>& progress)
-      : options_(options), progress_(progress), trajectory_(trajectory), model_(model),
+                 const std::function<void(const Progress&)>& progress, bool search = true)
+      : options_(options), progress_(progress), trajectory_(trajectory), model_(model), search_(search),
         start_(std::chrono::steady_clock::now()),
         cost_(std::make_shared<ShortTermCost>(model_, trajectory_)),
         no_terms_(cost_->termCount() == 0) {
@@ -265,9 +271,9 @@ class Identification {
 
   IdentifyResult run() {
     prepareSeeds();
-    if (!no_terms_) {
+    if (!no_terms_ && search_) {
       search();
-    } else {
+    } else if (no_terms_) {
       note("the one-step cost has no term (each needs three frames of a particle and two of its "
            "neighbours): the output error alone, from the equation-error start or the initial "
            "distribution's centre");
@@ -284,9 +290,14 @@ class Identification {
     r_.global_cost = es_ ? es_->best().cost : std::numeric_limits<double>::infinity();
     r_.estimator = Estimator::kShortTerm;
     r_.noise_estimate_m = estimateMarkerNoise(trajectory_);
+    r_.one_step_rms_m = std::sqrt(r_.global_cost / std::max<double>(1.0, cost_->residualCount()));
     unidentifiable_.assign(space_->size(), 0);
-    if (stop_ != IdentifyStop::kWallTime && stop_ != IdentifyStop::kCancelled && wantsOutputError())
-      runOutputError();
+    if (stop_ != IdentifyStop::kWallTime && stop_ != IdentifyStop::kCancelled && wantsOutputError()) {
+      if (defersOutputError())
+        r_.output_error_deferred = true;
+      else
+        runOutputError();
+    }
     return result();
   }
 
@@ -471,6 +482,7 @@ class Identification {
         observed += !model_.particles[i].fixed && !trajectory_.isOccluded(t, i);
     const bool starved = no_terms_ || (trajectory_.numFrames() >= 3 &&
                                        static_cast<double>(cost_->termCount()) < kStarvedShare * static_cast<double>(observed));
+    starved_ = starved;
     const bool output_error =
         options_.cost == CostChoice::kOutputError ||
         (options_.cost == CostChoice::kAuto &&
@@ -479,6 +491,21 @@ class Identification {
       note("the one-step cost uses " + std::to_string(cost_->termCount()) + " of " +
            std::to_string(observed) + " observed samples (occlusion): the output error uses all");
     return output_error;
+  }
+
+  /// The output error left to the caller (IdentifyOptions::defer_output_error_on_misfit): the
+  /// search's one-step residual is kDeferMisfitFactor times what the markers' noise gives, and
+  /// the one-step cost saw the samples (not starved by occlusion). Says why.
+  bool defersOutputError() {
+    if (!options_.defer_output_error_on_misfit || options_.cost != CostChoice::kAuto || starved_ || !es_)
+      return false;
+    const double noise_floor_m = std::sqrt(6.0) * r_.noise_estimate_m;
+    if (!(r_.one_step_rms_m > kDeferMisfitFactor * noise_floor_m)) return false;
+    note("the search's answer leaves one-step residuals of " + formatValue(r_.one_step_rms_m) +
+         " m per coordinate, " + formatValue(r_.one_step_rms_m / std::max(noise_floor_m, 1e-12)) +
+         "x what the markers' noise gives (the passive model does not explain the motion): the output "
+         "error is deferred, to run only if the sensor muscles do not replace the passive model");
+    return true;
   }
 
   /// The output error (output_error_step.h) from the search's answer; its answer replaces the
@@ -525,7 +552,7 @@ class Identification {
   void shortTermUncertainty() {
     std_devs_.assign(r_.values.size(), std::numeric_limits<double>::quiet_NaN());
     unidentifiable_.assign(r_.values.size(), 0);
-    if (!options_.estimate_std || stop_ == IdentifyStop::kCancelled) return;
+    if (!options_.estimate_std || stop_ == IdentifyStop::kCancelled || !search_) return;
     GeneUncertainty u = estimateStdDevs(*cost_, *space_, best_genes_);
     std_devs_ = std::move(u.std_devs);
     unidentifiable_ = std::move(u.unidentifiable);
@@ -560,10 +587,12 @@ class Identification {
   const std::function<void(const Progress&)>& progress_;
   const Trajectory& trajectory_;
   Model model_;
+  const bool search_;  ///< run the evolution strategy (false: the output error from the values)
   const std::chrono::steady_clock::time_point start_;
   std::shared_ptr<ShortTermCost> cost_;
   const bool no_terms_;
   bool has_threshold_genes_ = false;  ///< a conditional bond's threshold is searched
+  bool starved_ = false;  ///< the one-step cost leaves out most observed samples
   std::unique_ptr<ParameterSpace> space_;
   std::vector<std::vector<double>> seeds_;
   std::vector<std::string> notes_;
@@ -591,6 +620,52 @@ IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
   const std::string bad = validateOptions(options);
   if (!bad.empty()) throw InputError(bad);
   return Identification(model, trajectory, options, progress).run();
+}
+
+IdentifyResult runDeferredOutputError(const IdentifyResult& passive, const Trajectory& trajectory,
+                                      const IdentifyOptions& options,
+                                      const std::function<void(const Progress&)>& progress) {
+  IdentifyOptions o = options;
+  o.cost = CostChoice::kOutputError;
+  o.defer_output_error_on_misfit = false;
+  o.values_start = true;  // the passive answer is the output error's first start
+  o.equation_error_start = false;  // the output error tries its own smoothed starts
+  const std::string bad = validateOptions(o);
+  if (!bad.empty()) throw InputError(bad);
+  IdentifyResult out = passive;
+  out.output_error_deferred = false;
+  if (o.max_wall_time_s > 0.0) {  // the limit counts the passive identification's time too
+    o.max_wall_time_s -= passive.wall_time_s;
+    if (!(o.max_wall_time_s > 0.0)) {
+      out.notes.push_back("the deferred output error did not run: no time left");
+      out.stop = IdentifyStop::kWallTime;
+      return out;
+    }
+  }
+  const IdentifyResult oe = Identification(passive.model, trajectory, o, progress, false).run();
+  out.notes.insert(out.notes.end(), oe.notes.begin(), oe.notes.end());
+  out.wall_time_s += oe.wall_time_s;
+  if (oe.stop == IdentifyStop::kWallTime || oe.stop == IdentifyStop::kCancelled) out.stop = oe.stop;
+  if (oe.estimator != Estimator::kOutputError) return out;
+  // The output error's answer, with the search's figures (generations, islands) it started from.
+  const std::vector<std::string> notes = out.notes;
+  const double wall_time_s = out.wall_time_s;
+  const IdentifyStop stop = out.stop;
+  const IdentifyResult search = out;
+  out = oe;
+  out.notes = notes;
+  out.wall_time_s = wall_time_s;
+  out.stop = stop;
+  out.generations = search.generations;
+  out.evaluations = search.evaluations;
+  out.last_refine_status = search.last_refine_status;
+  out.bound_widenings = search.bound_widenings;
+  out.island_evaluations = search.island_evaluations;
+  out.island_immigrants_accepted = search.island_immigrants_accepted;
+  out.migrations = search.migrations;
+  out.best_island = search.best_island;
+  out.one_step_rms_m = search.one_step_rms_m;
+  return out;
 }
 
 }  // namespace mme

@@ -1,6 +1,7 @@
 #include "motion_model_estimation/pipeline/identify_pipeline.h"
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdio>
 #include <utility>
 
@@ -101,6 +102,7 @@ void fitSensorMuscleStep(const Trajectory& trajectory, const PipelineOptions& op
   // with a warning, rather than the run being lost.
   SensorMuscleOptions sensor_options = *options.sensor_muscles;
   if (!sensor_options.progress) sensor_options.progress = options.say;
+  sensor_options.threads = std::max(sensor_options.threads, options.identify.es.threads);
   try {
     result->sensor_muscles = addSensorMuscles(result->identified.model, trajectory, sensor_options);
   } catch (const InputError& e) {
@@ -116,6 +118,18 @@ void fitSensorMuscleStep(const Trajectory& trajectory, const PipelineOptions& op
   else if (!sm.skipped)
     warn(options, "the sensor muscles are not kept (" + sm.not_kept_because +
                       "): the passive model is written");
+}
+
+void deferredOutputErrorStep(const Trajectory& trajectory, const PipelineOptions& options,
+                             PipelineResult* result) {
+  say(options, "the sensor muscles do not replace the passive model: the deferred output error runs");
+  const size_t known = result->identified.notes.size();
+  result->identified = runDeferredOutputError(result->identified, trajectory, options.identify, options.progress);
+  const std::vector<std::string>& notes = result->identified.notes;
+  result->notes.insert(result->notes.end(), notes.begin() + static_cast<std::ptrdiff_t>(known), notes.end());
+  if (result->identified.estimator != Estimator::kOutputError) return;
+  result->model = result->identified.model;
+  startAtFrame(trajectory, 0, &result->model);
 }
 
 void startAtFrame(const Trajectory& trajectory, int frame, Model* model) {
@@ -193,7 +207,9 @@ PipelineResult runPipeline(const Model& model, const Trajectory& trajectory,
                      std::to_string(options.muscles->hidden) + " hidden unit(s)");
   }
   if (options.identification_starts) options.identification_starts(current, trajectory);
-  result.identified = identifyPassive(current, trajectory, steps);
+  PipelineOptions passive = steps;  // the output error waits for the muscles where it cannot pay
+  passive.identify.defer_output_error_on_misfit = options.sensor_muscles && options.output_error_after_muscles;
+  result.identified = identifyPassive(current, trajectory, passive);
   result.model = result.identified.model;
   startAtFrame(trajectory, 0, &result.model);
   result.notes = result.identified.notes;
@@ -203,6 +219,9 @@ PipelineResult runPipeline(const Model& model, const Trajectory& trajectory,
     fitSensorMuscleStep(trajectory, steps, &result);
     startAtFrame(trajectory, 0, &result.model);
   }
+  const bool muscles_kept = result.sensor_muscles && result.sensor_muscles->better_than_passive;
+  if (result.identified.output_error_deferred && !muscles_kept && !cancelled())
+    deferredOutputErrorStep(trajectory, steps, &result);
   result.cancelled = cancelled();
   return result;
 }

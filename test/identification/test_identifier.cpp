@@ -12,6 +12,7 @@
 #include "motion_model_estimation/core/stiffness.h"
 #include "motion_model_estimation/identification/estimators/answer_judge.h"
 #include "motion_model_estimation/identification/identifier.h"
+#include "motion_model_estimation/identification/muscles/muscle_placement.h"
 #include "motion_model_estimation/scenes/random_object.h"
 #include "motion_model_estimation/scenes/scenes.h"
 #include "test_helpers.h"
@@ -31,6 +32,17 @@ bool anyNote(const mme::IdentifyResult& r, const std::string& text) {
   for (const std::string& note : r.notes)
     if (note.find(text) != std::string::npos) return true;
   return false;
+}
+
+/// The output error ran: its judge's figures or a fit that was no answer.
+bool outputErrorRan(const mme::IdentifyResult& r) {
+  return anyNote(r, "judged 10 frames ahead on the fitted frames") || anyNote(r, "the output-error fit");
+}
+
+std::string allNotes(const mme::IdentifyResult& r) {
+  std::string text;
+  for (const std::string& note : r.notes) text += note + "\n";
+  return text;
 }
 
 using mme::test::StiffAtOneSubstep;
@@ -116,6 +128,74 @@ TEST(Identifier, OneStepStdFlagsWhatTheDataCannotDetermine) {
     ASSERT_TRUE(std::isfinite(without.std_devs[k]) && without.std_devs[k] > 0.0) << k;
     EXPECT_NEAR(with.std_devs[k], without.std_devs[k] * dof_ratio, 1e-9 * without.std_devs[k]) << k;
   }
+}
+
+/// A controller the passive springs lack: test_helpers' muscleObject with its muscle made a
+/// plain spring for the passive model, every spring's stiffness free, 1 um of marker noise. The
+/// search's one-step residuals are the controller's forces, far above what the noise gives.
+struct MissedController {
+  mme::Model truth = mme::test::muscleObject();
+  mme::Trajectory data = mme::simulateTrajectory(truth, 200, truth.frame_rate_hz);
+  mme::Model passive = mme::removeMuscles(truth);
+  MissedController() {
+    mme::addGaussianNoise(&data, 1e-6, 7);
+    for (mme::BondType& type : passive.bond_types) type.param(mme::kStiffness).free = true;
+  }
+};
+
+mme::IdentifyOptions quickDefaults() {
+  mme::IdentifyOptions o = mme::identifyOptionsFor(mme::Preset::kDefault);
+  o.es.threads = 1;
+  o.estimate_std = false;
+  o.generations = 80;
+  return o;
+}
+
+// Asked to defer it, the identification leaves the output error to its caller where the
+// one-step residuals are far above the markers' noise (the passive model misses a controller):
+// the answer is the search's, bit for bit, and a note says why. Not asked, the output error runs.
+TEST(Identifier, TheOutputErrorOnAModelThatMissesTheMotionIsDeferredWhenAsked) {
+  const MissedController c;
+  mme::IdentifyOptions o = quickDefaults();
+  const mme::IdentifyResult inline_oe = mme::identifyModel(c.passive, c.data, o);
+  EXPECT_FALSE(inline_oe.output_error_deferred);
+  EXPECT_TRUE(outputErrorRan(inline_oe)) << allNotes(inline_oe);
+  o.defer_output_error_on_misfit = true;
+  const mme::IdentifyResult deferred = mme::identifyModel(c.passive, c.data, o);
+  EXPECT_TRUE(deferred.output_error_deferred);
+  EXPECT_EQ(deferred.estimator, mme::Estimator::kShortTerm);
+  EXPECT_TRUE(anyNote(deferred, "the output error is deferred"));
+  EXPECT_FALSE(outputErrorRan(deferred)) << allNotes(deferred);
+  EXPECT_GT(deferred.one_step_rms_m, 2.0 * std::sqrt(6.0) * deferred.noise_estimate_m);
+  o.cost = mme::CostChoice::kShortTerm;
+  const mme::IdentifyResult one_step = mme::identifyModel(c.passive, c.data, o);
+  EXPECT_EQ(deferred.values, one_step.values);
+  // Run later, the output error is judged as inline: its answer only where it predicts no worse.
+  o.cost = mme::CostChoice::kAuto;
+  const mme::IdentifyResult later = mme::runDeferredOutputError(deferred, c.data, o);
+  EXPECT_FALSE(later.output_error_deferred);
+  EXPECT_TRUE(outputErrorRan(later)) << allNotes(later);
+  EXPECT_EQ(later.generations, deferred.generations);  // the search it started from
+  if (later.estimator == mme::Estimator::kShortTerm) EXPECT_EQ(later.values, deferred.values);
+  else EXPECT_LE(mme::judgedPredictionRms_m(later.model, c.data), mme::judgedPredictionRms_m(deferred.model, c.data));
+}
+
+// Where the passive model explains the motion (its residuals at the markers' noise) nothing is
+// deferred: the output error runs and the answer is the one without the option, bit for bit.
+TEST(Identifier, TheOutputErrorAtTheNoiseIsNeverDeferred) {
+  const mme::Model truth = mme::test::smallObject();
+  mme::Trajectory data = mme::simulateTrajectory(truth, 100, truth.frame_rate_hz);
+  mme::addGaussianNoise(&data, 1e-4, 11);
+  mme::IdentifyOptions o = quickDefaults();
+  const mme::IdentifyResult plain = mme::identifyModel(mme::test::withoutValues(truth), data, o);
+  o.defer_output_error_on_misfit = true;
+  const mme::IdentifyResult asked = mme::identifyModel(mme::test::withoutValues(truth), data, o);
+  EXPECT_FALSE(asked.output_error_deferred);
+  EXPECT_FALSE(anyNote(asked, "deferred"));
+  EXPECT_TRUE(anyNote(asked, "judged 10 frames ahead on the fitted frames"));
+  EXPECT_LT(asked.one_step_rms_m, 1.5 * std::sqrt(6.0) * asked.noise_estimate_m);
+  EXPECT_EQ(asked.estimator, plain.estimator);
+  EXPECT_EQ(asked.values, plain.values);
 }
 
 TEST(Identifier, DefaultEngineIdentifiesAHangingObjectWithoutBoundsAndStopsOnceConverged) {

@@ -18,6 +18,7 @@
 #include "motion_model_estimation/core/simulator.h"
 #include "motion_model_estimation/core/stiffness.h"
 #include "motion_model_estimation/identification/estimators/answer_judge.h"
+#include "motion_model_estimation/identification/muscles/muscle_placement.h"
 #include "motion_model_estimation/io/model_yaml.h"
 #include "motion_model_estimation/pipeline/identify_pipeline.h"
 #include "motion_model_estimation/pipeline/result_metadata.h"
@@ -145,6 +146,105 @@ TEST(IdentifyPipeline, TheFileHoldsTheBetterAnswerWhenTheOutputErrorBlowsUp) {
   EXPECT_NE(text.str().find("method: es\n"), std::string::npos) << text.str().substr(0, 400);
   std::remove(path.c_str());
   EXPECT_TRUE(std::isfinite(mme::judgedPredictionRms_m(written, data)));  // it does not blow up
+}
+
+/// A controller the passive springs lack (test_helpers' muscleObject, its network in the
+/// near-linear range sensor muscles represent: gain 100x, weights and bias / 100), every spring's
+/// stiffness free in the passive model, 1 um of noise: the one-step residuals are far above the
+/// noise, and sensor muscles learn the controller.
+struct MissedController {
+  mme::Model truth = mme::test::muscleObject();
+  mme::Trajectory data;
+  mme::Model passive;
+  MissedController() {
+    mme::BondType& type = truth.bond_types[truth.bondTypeIndex("m")];
+    type.param(mme::kGain).value *= 100.0;
+    for (mme::Param& p : type.network) p.value /= 100.0;
+    data = mme::simulateTrajectory(truth, 240, truth.frame_rate_hz);
+    mme::addGaussianNoise(&data, 1e-6, 7);
+    passive = mme::removeMuscles(truth);
+    for (mme::BondType& t : passive.bond_types) t.param(mme::kStiffness).free = true;
+  }
+};
+
+mme::PipelineOptions withSensorMuscles() {
+  mme::PipelineOptions o = quickOptions();
+  o.identify.estimate_std = false;
+  mme::SensorMuscleOptions sm;
+  sm.sensors = 6;  // every pair of the 4 particles
+  sm.neighbours = 3;
+  sm.anchors_by_validation = false;
+  o.sensor_muscles = sm;
+  o.output_error_after_muscles = true;
+  return o;
+}
+
+bool anyNote(const std::vector<std::string>& notes, const std::string& text) {
+  for (const std::string& note : notes)
+    if (note.find(text) != std::string::npos) return true;
+  return false;
+}
+
+/// The output error ran: its judge's figures or a fit that was no answer.
+bool outputErrorRan(const std::vector<std::string>& notes) {
+  return anyNote(notes, "judged 10 frames ahead on the fitted frames") || anyNote(notes, "the output-error fit");
+}
+
+// With sensor muscles and a passive model that misses the motion, the output error waits for
+// the muscles: kept, it never runs (the file's passive part is the search's answer); not kept
+// (here: a layout too large to fit), it runs after them and is judged as it would have been.
+TEST(IdentifyPipeline, TheOutputErrorRunsAfterTheMusclesOnlyWhenTheyAreNotKept) {
+  const MissedController c;
+  const mme::PipelineResult kept = mme::runPipeline(c.passive, c.data, withSensorMuscles());
+  ASSERT_TRUE(kept.sensor_muscles.has_value());
+  EXPECT_TRUE(kept.sensor_muscles->better_than_passive) << kept.sensor_muscles->not_kept_because;
+  EXPECT_TRUE(kept.identified.output_error_deferred);
+  EXPECT_EQ(kept.identified.estimator, mme::Estimator::kShortTerm);
+  EXPECT_TRUE(anyNote(kept.notes, "the output error is deferred"));
+  EXPECT_FALSE(outputErrorRan(kept.notes));
+  EXPECT_GT(mme::muscleTypeCount(kept.model), 0);
+
+  mme::PipelineOptions too_large = withSensorMuscles();
+  too_large.sensor_muscles->max_unknowns = 1;
+  std::vector<std::string> said;
+  too_large.say = [&](const std::string& line) { said.push_back(line); };
+  const mme::PipelineResult not_kept = mme::runPipeline(c.passive, c.data, too_large);
+  EXPECT_FALSE(not_kept.sensor_muscles.has_value());
+  EXPECT_FALSE(not_kept.identified.output_error_deferred);
+  EXPECT_TRUE(anyNote(not_kept.notes, "the output error is deferred"));
+  EXPECT_TRUE(outputErrorRan(not_kept.notes));
+  EXPECT_TRUE(anyNote(said, "the deferred output error runs"));
+  EXPECT_EQ(mme::muscleTypeCount(not_kept.model), 0);
+  EXPECT_EQ(mme::getValues(not_kept.model, not_kept.identified.parameters), not_kept.identified.values);
+
+  // Not deferred: the output error runs before the muscles, which are still fitted.
+  mme::PipelineOptions before = withSensorMuscles();
+  before.output_error_after_muscles = false;
+  const mme::PipelineResult first = mme::runPipeline(c.passive, c.data, before);
+  EXPECT_FALSE(first.identified.output_error_deferred);
+  EXPECT_FALSE(anyNote(first.notes, "the output error is deferred"));
+  EXPECT_TRUE(outputErrorRan(first.notes));
+  EXPECT_TRUE(first.sensor_muscles.has_value());
+}
+
+// A passive scene at the markers' noise with sensor muscles asked for: nothing is deferred, the
+// output error gives the answer as without muscles, and the muscles' gate skips them.
+TEST(IdentifyPipeline, APassiveSceneAtTheNoiseStillGetsTheOutputErrorFirst) {
+  const mme::Model truth = mme::test::smallObject();
+  mme::Trajectory data = mme::simulateTrajectory(truth, 100, truth.frame_rate_hz);
+  mme::addGaussianNoise(&data, 1e-4, 11);
+  mme::PipelineOptions o = quickOptions();
+  o.identify.estimate_std = false;
+  const mme::PipelineResult plain = mme::runPipeline(mme::test::withoutValues(truth), data, o);
+  o.sensor_muscles = mme::SensorMuscleOptions();
+  o.output_error_after_muscles = true;
+  const mme::PipelineResult with = mme::runPipeline(mme::test::withoutValues(truth), data, o);
+  EXPECT_FALSE(with.identified.output_error_deferred);
+  EXPECT_FALSE(anyNote(with.notes, "deferred"));
+  EXPECT_EQ(with.identified.estimator, plain.identified.estimator);
+  EXPECT_EQ(with.identified.values, plain.identified.values);
+  ASSERT_TRUE(with.sensor_muscles.has_value());
+  EXPECT_FALSE(with.sensor_muscles->better_than_passive);
 }
 
 // A raised cancel flag (Ctrl-C): the structure and the search end at once with their best so

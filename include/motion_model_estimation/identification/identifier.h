@@ -68,6 +68,14 @@ struct IdentifyOptions {
   /// A smooth parameter that ends within 1 % of a default (not user-given) bound: the bound is
   /// widened tenfold and the search resumed from the answer, at most this many times.
   int max_bound_widenings = 3;
+  /// kAuto only: when the search's answer leaves one-step residuals over 2x what the markers'
+  /// noise gives (the passive model does not explain the motion, as on a walk), the output
+  /// error is not run but left to the caller (IdentifyResult::output_error_deferred;
+  /// runDeferredOutputError), which runs it only when a later step (the sensor muscles) does
+  /// not replace the passive model: there it costs minutes and is rarely adopted. Where the
+  /// residuals are at the noise (a passive scene, where the output error reaches the
+  /// Cramer-Rao bound) or the one-step cost is starved by occlusion, it runs as always.
+  bool defer_output_error_on_misfit = false;
 };
 
 std::string validateOptions(const IdentifyOptions& options);
@@ -118,6 +126,10 @@ struct IdentifyResult {
   double noise_std_m = 0.0;          ///< output error: from its residuals (else 0)
   int substeps = 1;                  ///< integration steps per frame the answer was fitted with
   double stiffest_omega_h = 0.0;     ///< the answer's stiffest mode x frame period
+  /// IdentifyOptions::defer_output_error_on_misfit left the output error to the caller (the
+  /// answer is the search's; runDeferredOutputError runs it).
+  bool output_error_deferred = false;
+  double one_step_rms_m = 0.0;       ///< the search's answer's one-step residual per coordinate
   Model model;  ///< the input model with every free value filled in
 };
 
@@ -126,6 +138,14 @@ struct IdentifyResult {
 IdentifyResult identifyModel(const Model& model, const Trajectory& trajectory,
                              const IdentifyOptions& options,
                              const std::function<void(const Progress&)>& progress = nullptr);
+
+/// The output error identifyModel deferred (`passive.output_error_deferred`), from the passive
+/// answer's values without a new search: `passive` with the output error's answer where it is
+/// adopted (the same judge as identifyModel's), else `passive` unchanged; the notes of both
+/// runs either way. `options` are identifyModel's; `trajectory` the one it fitted.
+IdentifyResult runDeferredOutputError(const IdentifyResult& passive, const Trajectory& trajectory,
+                                      const IdentifyOptions& options,
+                                      const std::function<void(const Progress&)>& progress = nullptr);
 
 /// Per parameter at `genes`: within 1 % of a search bound, or else (where `unidentifiable` is
 /// given and says so) undetermined by the data. The offline result's and the live estimate's

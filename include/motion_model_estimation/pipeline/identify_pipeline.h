@@ -35,6 +35,14 @@ struct PipelineOptions {
   /// Fit sensor muscles on the identified model last (sensor_muscles.h); kept only where they
   /// predict the held-out frames better than the passive model.
   std::optional<SensorMuscleOptions> sensor_muscles;
+  /// With sensor muscles: the passive identification defers an output error that cannot pay
+  /// off (IdentifyOptions::defer_output_error_on_misfit: one-step residuals over 2x what the
+  /// markers' noise gives), and the pipeline runs it after the muscles only when they are not kept
+  /// (runDeferredOutputError). false: it runs before the muscles as identifyModel decides.
+  /// Off by default: where the output error's answer is adopted, the muscles fitted on it can
+  /// predict the held-out frames better than those fitted on the one-step answer
+  /// (docs/real_recordings.md, *The output error deferred*).
+  bool output_error_after_muscles = false;
   /// One line per step for a person (the structure's levels, the muscles' steps); may be empty.
   std::function<void(const std::string&)> say;
   /// Something the user should know that does not stop the run (e.g. muscles not kept); may be
@@ -97,6 +105,12 @@ IdentifyResult identifyPassive(const Model& model, const Trajectory& trajectory,
 /// Fills result->sensor_muscles, sensor_muscle_summary and, where kept, result->model.
 void fitSensorMuscleStep(const Trajectory& trajectory, const PipelineOptions& options,
                          PipelineResult* result);
+
+/// Step 5b: the output error the passive identification deferred
+/// (PipelineOptions::output_error_after_muscles), run when the sensor muscles did not replace
+/// the passive model; its answer, where adopted, becomes `result->identified` and the model.
+void deferredOutputErrorStep(const Trajectory& trajectory, const PipelineOptions& options,
+                             PipelineResult* result);
 
 /// Step 6: the particles' initial state from frame `frame` of `trajectory` (which holds the
 /// model's particles as markers, remapMarkers), so that the model plays from where the data

@@ -118,7 +118,8 @@ FinalFit chooseFinalFit(FitRun& run, const System& sys) {
 void refitOnEveryFrame(FitRun& run) {
   const SensorMuscleCandidate& best = run.result.candidates[run.best];
   System& sys = run.best_sys;
-  run.equations.accumulate(best.window_frames, run.validation_start - best.window_frames, run.frames, &sys);
+  run.equations.accumulate(best.window_frames, run.validation_start - best.window_frames, run.frames, &sys,
+                           run.pool.get());
   const FinalFit fit = chooseFinalFit(run, sys);
   SensorMuscleResult& result = run.result;
   const SensorMuscleCandidate chosen = result.candidates[fit.accepted];

@@ -62,11 +62,21 @@ void MuscleEquations::makePattern() {
   pattern_ = makeBlockPattern(m_, k_, std::move(coupled_below));
 }
 
-void MuscleEquations::accumulate(int window, int centre_begin, int centre_end, System* sys) const {
+void MuscleEquations::accumulate(int window, int centre_begin, int centre_end, System* sys, ThreadPool* pool) const {
   sizeSystem(pattern_, sys);
   const int first = std::max(window, centre_begin);
   const int last = std::min(centre_end, data_.numFrames() - window);  // exclusive
   if (first >= last) return;
+  if (window == 1 && pool && pool->threads() > 1) {  // the frames' pieces in batches, in order
+    std::vector<FramePieces> batch;
+    for (int t = first; t < last; ++t) {
+      batch.push_back(pieces(t));
+      if (batch.size() < kBatchFrames && t + 1 < last) continue;
+      addPiecesBatch(batch, sys, pool);
+      batch.clear();
+    }
+    return;
+  }
   // The one-step pieces of frames t - window + 1 .. t + window - 1, oldest first.
   std::deque<FramePieces> ring;
   Gradients g(m_);
@@ -170,11 +180,36 @@ void MuscleEquations::addPieces(const FramePieces& f, System* sys) const {
 /// phi_m phi_m2^T scaled by (u_m . u_m2) / mass^2, a third of the work of the general product.
 /// Only the blocks on and below the diagonal are kept (m2 <= m): the others are their transposes.
 void MuscleEquations::addFrameEquation(int i, const FramePieces& f, System* sys) const {
+  sys->btb += f.y[i].squaredNorm();
+  sys->rows += 3;
+  addFrameEquationPart(i, f, 0, 1, sys);
+}
+
+void MuscleEquations::addPiecesBatch(const std::vector<FramePieces>& batch, System* sys, ThreadPool* pool) const {
+  if (!pool || pool->threads() < 2) {
+    for (const FramePieces& f : batch) addPieces(f, sys);
+    return;
+  }
+  sizeSystem(pattern_, sys);
+  for (const FramePieces& f : batch)
+    for (int i = 0; i < n_; ++i)
+      if (f.particle_ok[i]) {
+        sys->btb += f.y[i].squaredNorm();
+        sys->rows += 3;
+      }
+  const int parts = pool->threads();
+  pool->parallelFor(static_cast<size_t>(parts), [&](size_t part) {
+    for (const FramePieces& f : batch)
+      for (int i = 0; i < n_; ++i)
+        if (f.particle_ok[i]) addFrameEquationPart(i, f, static_cast<int>(part), parts, sys);
+  });
+}
+
+void MuscleEquations::addFrameEquationPart(int i, const FramePieces& f, int part, int parts, System* sys) const {
   const double mass = passive_.particles[i].mass_kg;
   const Eigen::Vector3d& y = f.y[i];
-  sys->btb += y.squaredNorm();
-  sys->rows += 3;
   for (const auto& [m, sign] : at_[i]) {
+    if (m % parts != part) continue;
     const double wm = sign / mass;
     sys->atb.segment(m * k_, k_).noalias() += (wm * f.u[m].dot(y)) * f.phi.col(m);
     for (const auto& [m2, sign2] : at_[i]) {

@@ -14,6 +14,7 @@
 
 #include "motion_model_estimation/core/model.h"
 #include "motion_model_estimation/core/simulator.h"
+#include "motion_model_estimation/core/thread_pool.h"
 #include "motion_model_estimation/core/trajectory.h"
 #include "muscle_least_squares.h"
 #include "sensor_layout.h"
@@ -66,9 +67,16 @@ class MuscleEquations {
   /// window (frames t - window .. t + window) lies inside the data: per particle, the one-step
   /// equations of frames t - window + 1 .. t + window - 1 summed with triangle weights
   /// window - |j|.
-  void accumulate(int window, int centre_begin, int centre_end, System* sys) const;
+  /// `pool` (may be null) shares window 1's accumulation out (addPiecesBatch): the same sums.
+  void accumulate(int window, int centre_begin, int centre_end, System* sys, ThreadPool* pool = nullptr) const;
+  /// Frames whose pieces a batch holds at most (each holds 2S + 3 doubles per muscle).
+  static constexpr size_t kBatchFrames = 64;
   /// Adds one frame's equations (window 1).
   void addPieces(const FramePieces& f, System* sys) const;
+  /// Adds the frames' equations in order, as addPieces one after the other does, bit for bit:
+  /// with a pool, the normal matrix's block rows are shared out among its threads (each block
+  /// row gets its terms in the same order whichever thread writes it). `pool` may be null.
+  void addPiecesBatch(const std::vector<FramePieces>& batch, System* sys, ThreadPool* pool) const;
   /// The one-step equations of the middle frame of `frames` (its acceleration from all three).
   FramePieces pieces(const Frames3& frames) const;
   /// Frames t-1, t, t+1 of the data.
@@ -86,6 +94,9 @@ class MuscleEquations {
                          System* sys) const;
   void addEquation(int i, const Gradients& g, const Eigen::Vector3d& y, System* sys) const;
   void addFrameEquation(int i, const FramePieces& f, System* sys) const;
+  /// addFrameEquation's terms of the muscles m with m % parts == part (their block rows and
+  /// right-hand sides), without the residual's square and the row count.
+  void addFrameEquationPart(int i, const FramePieces& f, int part, int parts, System* sys) const;
   State stateAt(const Frames3& f) const;
   bool muscleGeometry(const Frames3& f, int m, const State& state, Eigen::Vector3d* u, double* e,
                       double* s) const;

@@ -42,7 +42,7 @@ namespace {
 /// The candidates of one window; false when the window gives no equation.
 bool judgeWindow(FitRun& run, int window) {
   System sys;
-  run.equations.accumulate(window, 0, run.validation_start - window, &sys);
+  run.equations.accumulate(window, 0, run.validation_start - window, &sys, run.pool.get());
   if (sys.rows == 0) return false;
   const int window_first = static_cast<int>(run.result.candidates.size());
   for (double ridge : run.o.ridges) {

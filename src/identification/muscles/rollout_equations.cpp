@@ -11,25 +11,30 @@ RolloutEquations::RolloutEquations(const MuscleEquations& equations)
 }
 
 RolloutCount RolloutEquations::accumulate(const Model& model, const RolloutSettings& settings, int start_begin,
-                                          int start_end, System* sys) const {
+                                          int start_end, System* sys, ThreadPool* pool) const {
   sizeSystem(eq_.pattern(), sys);
   Simulator sim(model);
   const int last = std::min(start_end, data_.numFrames() - settings.horizon_frames);  // exclusive
   RolloutCount count;
   Scratch scratch;
   State state;
+  std::vector<FramePieces> batch;  // the rollouts' rows, added in their order
   for (int t = std::max(start_begin, 1); t < last; t += settings.stride_frames) {
     int filled = 0;
     if (!startState(t, &state, &filled)) continue;
     ++count.starts;
     if (filled > 0) ++count.filled;
-    if (!rollOne(&sim, t, settings, &state, &scratch, sys)) ++count.stopped;
+    if (!rollOne(&sim, t, settings, &state, &scratch, &batch)) ++count.stopped;
+    if (batch.size() < MuscleEquations::kBatchFrames) continue;
+    eq_.addPiecesBatch(batch, sys, pool);
+    batch.clear();
   }
+  eq_.addPiecesBatch(batch, sys, pool);
   return count;
 }
 
 bool RolloutEquations::rollOne(Simulator* sim, int t, const RolloutSettings& settings, State* state,
-                               Scratch* scratch, System* sys) const {
+                               Scratch* scratch, std::vector<FramePieces>* batch) const {
   for (int k = 1; k < settings.horizon_frames; ++k) {
     scratch->before = state->x_m;
     sim->stepFrame(state, h_);
@@ -40,7 +45,7 @@ bool RolloutEquations::rollOne(Simulator* sim, int t, const RolloutSettings& set
     f.x[1] = state->x_m.data();
     f.x[2] = scratch->next.data();
     f.occluded[2] = scratch->occluded.data();
-    eq_.addPieces(eq_.pieces(f), sys);
+    batch->push_back(eq_.pieces(f));
   }
   return true;
 }

@@ -40,8 +40,10 @@ class RolloutEquations {
   /// posture and speeds, its target the data's acceleration at t + k plus a critically damped
   /// return to the data. The one-step fit learns where the data go from where the data are;
   /// these rows teach it where to go from where its own errors take it.
+  /// `pool` (may be null) shares out the rows' accumulation (MuscleEquations::addPiecesBatch):
+  /// the same sums whatever the threads.
   RolloutCount accumulate(const Model& model, const RolloutSettings& settings, int start_begin, int start_end,
-                          System* sys) const;
+                          System* sys, ThreadPool* pool = nullptr) const;
 
   /// The state a rollout starts from at frame t: a particle seen at t - 1 and t at its position
   /// there, its velocity their difference; one unseen at either placed by the rigid motion of its
@@ -64,9 +66,10 @@ class RolloutEquations {
     std::vector<uint8_t> occluded;
   };
 
-  /// Runs one rollout from frame t (state at t), adding its rows; false when it was stopped.
+  /// Runs one rollout from frame t (state at t), adding its frames' pieces to `batch`; false
+  /// when it was stopped.
   bool rollOne(Simulator* sim, int t, const RolloutSettings& settings, State* state, Scratch* scratch,
-               System* sys) const;
+               std::vector<FramePieces>* batch) const;
   /// Every particle finite and, where seen at `frame`, within the data's extent of its marker.
   bool nearData(int frame, const State& state) const;
   /// The target frame after `state` (at data frame `frame`): per particle seen in the data's

@@ -86,7 +86,7 @@ bool runRounds(FitRun& run, const System& data_rows, double ridge, Eigen::Vector
   for (int round = 1; round <= rounds; ++round) {
     if (budgeted && round > 1 && run.budget.stops(o, "further rollout round")) return true;
     const RolloutCount count =
-        run.rollouts.accumulate(run.build(theta, gain_t_end), settings, 1, start_end, &all);
+        run.rollouts.accumulate(run.build(theta, gain_t_end), settings, 1, start_end, &all, run.pool.get());
     if (!run.solve(all, ridge, &theta, reference_diagonal)) return false;
     each(round, theta, count);
   }

@@ -25,6 +25,7 @@ FitRun::FitRun(const Model& passive_model, const Trajectory& data_frames, const 
       layout(chooseLayoutWithinUnknowns(passive_model, data_frames, anchor, options)),
       equations(passive_model, data_frames, layout), rollouts(equations),
       judge(data_frames, options.horizon_frames, first_validation_frame),
+      pool(options.threads > 1 ? std::make_unique<ThreadPool>(options.threads) : nullptr),
       constraints(equations.signConstraints(options.nonnegative_own_spring)) {
   result.sensors = static_cast<int>(layout.sensors.size());
   result.muscles = static_cast<int>(layout.muscles.size());

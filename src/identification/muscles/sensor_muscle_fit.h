@@ -12,6 +12,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -66,6 +67,8 @@ struct FitRun {
   const MuscleEquations equations;
   const RolloutEquations rollouts;
   const ValidationJudge judge;
+  /// SensorMuscleOptions::threads - 1 workers for the equations' accumulation (null: 1 thread).
+  std::unique_ptr<ThreadPool> pool;
   SignConstraints constraints;  ///< with the selection's dropped columns once one is adopted
   GroupSelection selection;     ///< the adopted selection (empty: none)
 

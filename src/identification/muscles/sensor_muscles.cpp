@@ -82,6 +82,8 @@ void checkOtherOptions(const SensorMuscleOptions& o) {
     throw InputError("sensor muscles: min_seen_share must be in [0, 1]");
   if (!finiteAtLeast(o.max_time_s, 0.0))
     throw InputError("sensor muscles: the time limit must be a finite number >= 0 s (0: none)");
+  if (o.threads < 1 || o.threads > 256)
+    throw InputError("sensor muscles: threads must be 1..256, got " + std::to_string(o.threads));
   if (o.max_unknowns < 1 || o.max_unknowns > kMaxUnknowns)
     throw InputError("sensor muscles: max_unknowns must be 1.." + std::to_string(kMaxUnknowns) + ", got " +
                      std::to_string(o.max_unknowns));

@@ -225,6 +225,32 @@ TEST(SensorMuscles, TheGateLetsASceneWithAControllerThrough) {
   EXPECT_GT(r.rows, r.unknowns);
 }
 
+// Threads share out the equations' sums by block rows, each row's terms in the same order: the
+// candidates, the choice and the written muscles are the same bit for bit with 1 and 3 threads
+// (the one-step equations, the rollout rounds and the final refit all accumulate so).
+TEST(SensorMuscles, ThreadsGiveTheSameFitBitForBit) {
+  const LinearControllerCase c;
+  mme::Trajectory noisy = mme::sliceFrames(c.data, 0, kFitted);
+  mme::addGaussianNoise(&noisy, 1e-5, 3);
+  mme::SensorMuscleOptions o = smallOptions();
+  const mme::SensorMuscleResult one = mme::addSensorMuscles(c.passive, noisy, o);
+  o.threads = 3;
+  const mme::SensorMuscleResult three = mme::addSensorMuscles(c.passive, noisy, o);
+  ASSERT_FALSE(one.candidates.empty());
+  ASSERT_GT(one.candidates.back().rollout_rounds, 0);  // the rounds ran
+  ASSERT_EQ(one.candidates.size(), three.candidates.size());
+  for (size_t k = 0; k < one.candidates.size(); ++k) {
+    EXPECT_EQ(one.candidates[k].validation_rms_m, three.candidates[k].validation_rms_m) << k;
+    EXPECT_EQ(one.candidates[k].bounded, three.candidates[k].bounded) << k;
+  }
+  EXPECT_EQ(one.chosen, three.chosen);
+  EXPECT_EQ(one.validation_rms_m, three.validation_rms_m);
+  EXPECT_EQ(one.residual_rms_m, three.residual_rms_m);
+  EXPECT_EQ(mme::modelToYaml(one.model), mme::modelToYaml(three.model));
+  o.threads = 0;
+  EXPECT_THROW(mme::addSensorMuscles(c.passive, noisy, o), mme::InputError);
+}
+
 /// Each muscle's own stiffness and damping in `model`: how many are negative.
 int negativeOwnSprings(const Model& model) {
   int negative = 0;

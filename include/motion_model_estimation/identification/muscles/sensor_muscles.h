@@ -102,6 +102,9 @@ struct SensorMuscleOptions {
   /// one-step residual (what the muscles fit) is only the markers' noise. The result then has
   /// `skipped` set, the passive model and the reason (not_kept_because).
   bool skip_without_gain = true;
+  /// Threads that accumulate the equations (1..256; the pipeline gives the identification's):
+  /// the sums, and so the result, are the same bit for bit whatever the count.
+  int threads = 1;
   std::function<void(const std::string&)> progress;  ///< one line per step (may be empty)
 };
 
