@@ -120,6 +120,28 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
   fixed_frame_ = options_.fixed_frame.empty() ? model.frame_id : options_.fixed_frame;
   marker_style_.frame_id = fixed_frame_;
   marker_style_.particle_diameter_m = options_.particle_diameter_m;
+  connectRos();
+  if (options_.islands.enabled) {
+    IslandLinkOptions islands = options_.islands;
+    if (islands.island_id.empty()) islands.island_id = ros::this_node::getName();
+    try {
+      islands_ = std::make_unique<IslandLink>(nh_, islands, estimator_.get());
+    } catch (const ros::InvalidNameException& e) {
+      throw InputError("~migration_topic '" + islands.migration_topic + "': " + e.what());
+    }
+    ROS_INFO("estimator_node: island '%s': %d migrants every %d generations on %s",
+             islands.island_id.c_str(), islands.migrants, islands.migration_period_generations,
+             islands.migration_topic.c_str());
+  }
+  ROS_INFO("estimator_node: %zu particles, %zu free parameters, window %d frames, population %d, "
+           "input %s%s", model.particles.size(), freeParameters(model).size(),
+           options_.estimator.window_frames, options_.estimator.es.population,
+           options_.bag.empty() ? inputTypeName(options_.input_type) : "bag ",
+           options_.bag.c_str());
+}
+
+/// The node's topics, services and timers (the estimator and the background jobs exist by now).
+void EstimatorNode::connectRos() {
   estimate_pub_ = pnh_.advertise<motion_model_estimation::ModelEstimate>(names::kEstimate, 10);
   markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>(names::kVisualization, 2);
   stats_pub_ = pnh_.advertise<std_msgs::String>("stats", 1, true);  // latched, 1 Hz
@@ -148,23 +170,6 @@ EstimatorNode::EstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh,
     predictions_ = std::make_unique<PredictionMonitor>(std::vector<int>{1, 5, 10},
                                                        options_.prediction_period_sec);
   stats_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), &EstimatorNode::onStatsTimer, this);
-  if (options_.islands.enabled) {
-    IslandLinkOptions islands = options_.islands;
-    if (islands.island_id.empty()) islands.island_id = ros::this_node::getName();
-    try {
-      islands_ = std::make_unique<IslandLink>(nh_, islands, estimator_.get());
-    } catch (const ros::InvalidNameException& e) {
-      throw InputError("~migration_topic '" + islands.migration_topic + "': " + e.what());
-    }
-    ROS_INFO("estimator_node: island '%s': %d migrants every %d generations on %s",
-             islands.island_id.c_str(), islands.migrants, islands.migration_period_generations,
-             islands.migration_topic.c_str());
-  }
-  ROS_INFO("estimator_node: %zu particles, %zu free parameters, window %d frames, population %d, "
-           "input %s%s", model.particles.size(), freeParameters(model).size(),
-           options_.estimator.window_frames, options_.estimator.es.population,
-           options_.bag.empty() ? inputTypeName(options_.input_type) : "bag ",
-           options_.bag.c_str());
 }
 
 EstimatorNode::~EstimatorNode() {

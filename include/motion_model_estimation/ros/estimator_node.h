@@ -68,6 +68,7 @@ class EstimatorNode {
   bool useStructure(const Model& model);
   /// Names the calling thread and gives it ~background_nice (threads beside the worker).
   void startBackgroundThread(const char* name) const;
+  void connectRos();  ///< advertise, subscribe, start the timers
   /// ~select_structure: chooses the structure when requested and the window is full, then
   /// hands the model to the estimator and writes the report.
   void structureLoop();
