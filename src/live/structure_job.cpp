@@ -34,18 +34,15 @@ std::optional<StructureResult> StructureJob::runIfDue(const Trajectory& window, 
     state_ = State::kRunning;
   }
   try {
-    // The pipeline's structure step (chooseStructure), with the first level passed on.
-    StructureOptions so;
-    so.identify = options_.identify;
-    so.max_wall_time_s = options_.identify.max_wall_time_s;
-    so.progress = options_.say;
+    // The pipeline's structure step, with the first level passed on.
+    std::function<void(const StructureCandidate&)> on_first_level;
     if (first_level)
-      so.on_first_level = [this, &first_level](const StructureCandidate& c) {
+      on_first_level = [this, &first_level](const StructureCandidate& c) {
         Model model = c.model;
         model.frame_rate_hz = base_.frame_rate_hz;
         first_level(model, c.name);
       };
-    StructureResult result = selectStructure(base_, window, so);
+    StructureResult result = chooseStructure(base_, window, options_, std::move(on_first_level));
     std::string level;
     for (const StructureCandidate& c : result.candidates)
       if (c.chosen) level = c.name;

@@ -74,11 +74,13 @@ std::string validateOptions(const PipelineOptions& options) {
 Model startingModel(const Trajectory& data) { return markerModel(data); }
 
 StructureResult chooseStructure(const Model& model, const Trajectory& trajectory,
-                                const PipelineOptions& options) {
+                                const PipelineOptions& options,
+                                std::function<void(const StructureCandidate&)> on_first_level) {
   StructureOptions so;
   so.identify = options.identify;
   so.max_wall_time_s = options.identify.max_wall_time_s;
   so.progress = options.say;
+  so.on_first_level = std::move(on_first_level);
   return selectStructure(model, trajectory, so);
 }
 

@@ -88,9 +88,12 @@ struct PipelineResult {
 Model startingModel(const Trajectory& data);
 
 /// Step 2: the structure chosen from the markers; the model's own bonds stay.
-/// `trajectory` holds the model's particles as markers (remapMarkers).
+/// `trajectory` holds the model's particles as markers (remapMarkers). `on_first_level`, when
+/// set, hears the first level as soon as it is judged (the live node starts on it while the
+/// later levels are judged).
 StructureResult chooseStructure(const Model& model, const Trajectory& trajectory,
-                                const PipelineOptions& options);
+                                const PipelineOptions& options,
+                                std::function<void(const StructureCandidate&)> on_first_level = {});
 
 /// Step 3: plain spring types become muscle types reading their nearest bonds. InputError when
 /// the model has no spring type that can become a muscle.
