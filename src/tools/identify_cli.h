@@ -6,6 +6,63 @@
 
 namespace mme {
 
+/// identify's search options (the evolution strategy and the islands).
+inline CliGroup identifySearchOptions() {
+  return {"Search",
+   {{"preset", "NAME", "default",
+     "default: the measured best settings; paper: the paper's method (random starts, its "
+     "bounds, one-step cost, the whole generation budget)."},
+    {"method", "NAME", "es", "The search method; es (evolution strategy) is the only one."},
+    {"generations", "N", "1000", "The generation budget of the evolution strategy."},
+    {"population", "P", "100", "Individuals per generation."},
+    {"patience", "G", "50 (paper: 0)",
+     "Stop once the best cost fell by less than 1e-4 (relative) over G generations; 0 runs "
+     "the whole budget."},
+    {"target-cost", "C", "0 (never)", "Stop once the cost [m^2] is at most C."},
+    {"max-time-s", "S", "0 (no limit)",
+     "Wall-time limit [s] of the structure selection (all its levels) and then of the "
+     "passive identification; a cut selection keeps the best level judged so far."},
+    {"seed", "S", "1", "Random seed: the same seed, input and --threads give the same result."},
+    {"threads", "T", "1", "Threads evaluating the population (with --islands: shared by the islands)."},
+    {"islands", "N", "1",
+     "Island model: N populations of --population each, own seeds, stepping in lock-step in "
+     "this process (threads, deterministic); the best island's best is the answer."},
+    {"island-processes", "", "",
+     "With --islands N: each island in a child process of its own (this host), migrants "
+     "passed through this process; the same result as threads, bit for bit."},
+    {"migration-period", "G", "10", "Islands: generations between migrations."},
+    {"migrants", "K", "2", "Islands: best individuals each island sends to every other island per migration."}}};
+}
+
+/// identify's structure-selection and muscle options.
+inline CliGroup identifyStructureAndMuscleOptions() {
+  return {"Structure and muscles",
+   {{"select-structure", "", "",
+     "Choose the bonds from the markers (springs, dampers, flexion, nonlinear and "
+     "conditional levels, judged on held-out frames); without --model the markers are the "
+     "particles. Writes the levels' report to OUT.yaml.structure.csv."},
+    {"sensor-muscles", "auto|off|SENSORS", "auto (off with --preset paper or --compare-to-model)",
+     "Sensor muscles after the passive model, kept only where they predict held-out frames "
+     "better. auto: reading 16 bonds each, but not started where the passive model already "
+     "predicts at the markers' noise or its one-step residual is only noise (the reason is "
+     "printed and noted in the file); off (or 0): a plain passive model; SENSORS: reading "
+     "SENSORS bonds each, always fitted. They add three anchor particles far from the body "
+     "(with anchors)."},
+    {"muscles-max-time-s", "S", "0 (no limit)",
+     "Wall-time limit [s] of the sensor muscles' search (checked between its steps)."},
+    {"muscle-neighbours", "K", "2", "Sensor muscles: neighbour muscles per particle."},
+    {"rollout-rounds", "R", "3", "Sensor muscles: rounds of rollout equations (0..20)."},
+    {"muscle-anchors", "auto|0|1", "auto",
+     "Sensor muscles: anchors far from the body (1), none (0), or the layout predicting the "
+     "validation frames better (auto)."},
+    {"anchor-stiffness", "1|0|auto", "1",
+     "Sensor muscles: the anchor muscles' own stiffness fitted (1), held at 0 (0), or held at "
+     "0 for a travelling body (auto)."},
+    {"add-muscles", "INPUTS", "off (2 when --muscle-hidden is given)",
+     "Turn the model's plain spring types into muscles reading INPUTS nearest bonds."},
+    {"muscle-hidden", "H", "0", "Hidden units of those muscles' networks."}}};
+}
+
 inline CliSpec identifyCliSpec() {
   CliSpec s;
   s.tool = "identify";
@@ -34,30 +91,7 @@ inline CliSpec identifyCliSpec() {
          "The first frame used, counted from 0 (not by the file's Frame# column, which often starts at 1)."},
         {"frames", "N", "every frame from --first-frame on", "How many frames to use."},
         {"window-frames", "W", "no limit", "At most this many frames (an upper bound on --frames)."}}},
-      {"Search",
-       {{"preset", "NAME", "default",
-         "default: the measured best settings; paper: the paper's method (random starts, its "
-         "bounds, one-step cost, the whole generation budget)."},
-        {"method", "NAME", "es", "The search method; es (evolution strategy) is the only one."},
-        {"generations", "N", "1000", "The generation budget of the evolution strategy."},
-        {"population", "P", "100", "Individuals per generation."},
-        {"patience", "G", "50 (paper: 0)",
-         "Stop once the best cost fell by less than 1e-4 (relative) over G generations; 0 runs "
-         "the whole budget."},
-        {"target-cost", "C", "0 (never)", "Stop once the cost [m^2] is at most C."},
-        {"max-time-s", "S", "0 (no limit)",
-         "Wall-time limit [s] of the structure selection (all its levels) and then of the "
-         "passive identification; a cut selection keeps the best level judged so far."},
-        {"seed", "S", "1", "Random seed: the same seed, input and --threads give the same result."},
-        {"threads", "T", "1", "Threads evaluating the population (with --islands: shared by the islands)."},
-        {"islands", "N", "1",
-         "Island model: N populations of --population each, own seeds, stepping in lock-step in "
-         "this process (threads, deterministic); the best island's best is the answer."},
-        {"island-processes", "", "",
-         "With --islands N: each island in a child process of its own (this host), migrants "
-         "passed through this process; the same result as threads, bit for bit."},
-        {"migration-period", "G", "10", "Islands: generations between migrations."},
-        {"migrants", "K", "2", "Islands: best individuals each island sends to every other island per migration."}}},
+      identifySearchOptions(),
       {"Cost and refinement",
        {{"cost", "NAME", "auto (paper: short_term)",
          "auto: the output error when the markers look noisy, else the one-step cost; "
@@ -70,31 +104,7 @@ inline CliSpec identifyCliSpec() {
          "levenberg_marquardt."},
         {"refine-start", "G", "5 (paper: 400)", "The first generation with a refinement."},
         {"refine-period", "G", "5 (paper: 100)", "Generations between refinements (0: never)."}}},
-      {"Structure and muscles",
-       {{"select-structure", "", "",
-         "Choose the bonds from the markers (springs, dampers, flexion, nonlinear and "
-         "conditional levels, judged on held-out frames); without --model the markers are the "
-         "particles. Writes the levels' report to OUT.yaml.structure.csv."},
-        {"sensor-muscles", "auto|off|SENSORS", "auto (off with --preset paper or --compare-to-model)",
-         "Sensor muscles after the passive model, kept only where they predict held-out frames "
-         "better. auto: reading 16 bonds each, but not started where the passive model already "
-         "predicts at the markers' noise or its one-step residual is only noise (the reason is "
-         "printed and noted in the file); off (or 0): a plain passive model; SENSORS: reading "
-         "SENSORS bonds each, always fitted. They add three anchor particles far from the body "
-         "(with anchors)."},
-        {"muscles-max-time-s", "S", "0 (no limit)",
-         "Wall-time limit [s] of the sensor muscles' search (checked between its steps)."},
-        {"muscle-neighbours", "K", "2", "Sensor muscles: neighbour muscles per particle."},
-        {"rollout-rounds", "R", "3", "Sensor muscles: rounds of rollout equations (0..20)."},
-        {"muscle-anchors", "auto|0|1", "auto",
-         "Sensor muscles: anchors far from the body (1), none (0), or the layout predicting the "
-         "validation frames better (auto)."},
-        {"anchor-stiffness", "1|0|auto", "1",
-         "Sensor muscles: the anchor muscles' own stiffness fitted (1), held at 0 (0), or held at "
-         "0 for a travelling body (auto)."},
-        {"add-muscles", "INPUTS", "off (2 when --muscle-hidden is given)",
-         "Turn the model's plain spring types into muscles reading INPUTS nearest bonds."},
-        {"muscle-hidden", "H", "0", "Hidden units of those muscles' networks."}}},
+      identifyStructureAndMuscleOptions(),
   };
   s.examples = {
       "identify --trajectory capture.trc --select-structure --out capture_model.yaml",
