@@ -194,22 +194,34 @@ TEST(EvolutionStrategy, WarmStartKeepsThePopulationOnANewWindow) {
   EXPECT_LT(err_after, std::max(0.5, 10 * err_before));
 }
 
+/// Two islands of 20 on the small object: `strong` after 40 generations, `weak` (another seed)
+/// after one.
+struct TwoIslands {
+  Fixture f;
+  std::unique_ptr<mme::EvolutionStrategy> strong, weak;
+  TwoIslands() {
+    mme::EsOptions options;
+    options.population = 20;
+    options.offspring = 20;
+    options.refine_period = 0;
+    strong = std::make_unique<mme::EvolutionStrategy>(mme::ParameterSpace(f.search, f.data), options);
+    strong->setCost(f.cost);
+    for (int g = 0; g < 40; ++g) strong->step();
+    options.seed = 7;
+    weak = std::make_unique<mme::EvolutionStrategy>(mme::ParameterSpace(f.search, f.data), options);
+    weak->setCost(f.cost);
+    weak->step();
+  }
+};
+
 // Island model: a strong island's emigrants enter a weak island's population in place of its
 // worst individuals (re-evaluated there), a worse arrival changes nothing, and an arrival of
 // the wrong size is refused with a reason.
 TEST(EvolutionStrategy, ImmigrantsReplaceTheWorstOnlyWhenBetter) {
-  Fixture f;
-  mme::EsOptions options;
-  options.population = 20;
-  options.offspring = 20;
-  options.refine_period = 0;
-  mme::EvolutionStrategy strong(mme::ParameterSpace(f.search, f.data), options);
-  strong.setCost(f.cost);
-  for (int g = 0; g < 40; ++g) strong.step();
-  options.seed = 7;
-  mme::EvolutionStrategy weak(mme::ParameterSpace(f.search, f.data), options);
-  weak.setCost(f.cost);
-  weak.step();
+  TwoIslands t;
+  Fixture& f = t.f;
+  mme::EvolutionStrategy& strong = *t.strong;
+  mme::EvolutionStrategy& weak = *t.weak;
   ASSERT_LT(strong.best().cost, weak.best().cost);
 
   const std::vector<mme::Individual> out = strong.emigrants(3);
@@ -251,18 +263,9 @@ TEST(EvolutionStrategy, ImmigrantsReplaceTheWorstOnlyWhenBetter) {
 // a worse individual (a deliberate choice: the copies raise the best's share of the parents,
 // docs/benchmarks.md), and is evaluated once per copy.
 TEST(EvolutionStrategy, IdenticalImmigrantsEachTakeAPlace) {
-  Fixture f;
-  mme::EsOptions options;
-  options.population = 20;
-  options.offspring = 20;
-  options.refine_period = 0;
-  mme::EvolutionStrategy strong(mme::ParameterSpace(f.search, f.data), options);
-  strong.setCost(f.cost);
-  for (int g = 0; g < 40; ++g) strong.step();
-  options.seed = 7;
-  mme::EvolutionStrategy weak(mme::ParameterSpace(f.search, f.data), options);
-  weak.setCost(f.cost);
-  weak.step();
+  TwoIslands t;
+  mme::EvolutionStrategy& strong = *t.strong;
+  mme::EvolutionStrategy& weak = *t.weak;
   ASSERT_LT(strong.best().cost, weak.best().cost);
 
   const mme::Individual best = strong.emigrants(1).at(0);
