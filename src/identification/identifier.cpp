@@ -648,14 +648,11 @@ IdentifyResult runDeferredOutputError(const IdentifyResult& passive, const Traje
   if (oe.stop == IdentifyStop::kWallTime || oe.stop == IdentifyStop::kCancelled) out.stop = oe.stop;
   if (oe.estimator != Estimator::kOutputError) return out;
   // The output error's answer, with the search's figures (generations, islands) it started from.
-  const std::vector<std::string> notes = out.notes;
-  const double wall_time_s = out.wall_time_s;
-  const IdentifyStop stop = out.stop;
   const IdentifyResult search = out;
   out = oe;
-  out.notes = notes;
-  out.wall_time_s = wall_time_s;
-  out.stop = stop;
+  out.notes = search.notes;
+  out.wall_time_s = search.wall_time_s;
+  out.stop = search.stop;
   out.generations = search.generations;
   out.evaluations = search.evaluations;
   out.last_refine_status = search.last_refine_status;
